@@ -1,0 +1,105 @@
+# A scripted stand-in for machine.UART, for tests that run without hardware.
+#
+#   uart = FakeUART()
+#   uart.feed(b"\x55\x55\x02\x07")             # bytes the controller "sent"
+#   uart.reply(request, response, delay_ms=5)  # answer a write, after a while
+#   uart.chunks = [1]                          # readinto() hands out 1 byte a call
+#   uart.written()                             # every byte the driver wrote
+#
+# Like machine.UART, read() and readinto() return None when nothing is waiting
+# and any() counts the bytes waiting. any(), readinto() and write() allocate
+# nothing (when no reply is scripted), so allocation tests can use it too.
+import time
+
+
+class FakeUART:
+    def __init__(self, chunks=None):
+        self.chunks = chunks  # sizes readinto() hands out in turn; None: all asked for
+        self._turn = 0
+        self._in = bytearray()
+        self._head = 0
+        self._out = bytearray(4096)
+        self._nout = 0
+        self.writes = 0  # number of write() calls
+        self._replies = {}
+        self._later = []  # [(due ticks_ms, bytes)], in order
+
+    # What the tests do.
+
+    def feed(self, data):
+        """Make data readable now."""
+        self._in = self._in[self._head :] + data
+        self._head = 0
+
+    def feed_later(self, data, delay_ms):
+        """Make data readable delay_ms from now."""
+        self._later.append((time.ticks_add(time.ticks_ms(), delay_ms), bytes(data)))
+
+    def reply(self, request, response, delay_ms=0):
+        """Answer every write of exactly `request` with `response`."""
+        self._replies[bytes(request)] = (bytes(response), delay_ms)
+
+    def written(self):
+        return bytes(self._out[: self._nout])
+
+    def clear(self):
+        self._nout = 0
+        self.writes = 0
+
+    # What machine.UART does.
+
+    def _arrive(self):
+        while self._later and time.ticks_diff(time.ticks_ms(), self._later[0][0]) >= 0:
+            self.feed(self._later.pop(0)[1])
+
+    def any(self):
+        if self._later:
+            self._arrive()
+        return len(self._in) - self._head
+
+    def readinto(self, buf, nbytes=None):
+        n = self.any()
+        if not n:
+            return None
+        if nbytes is None:
+            nbytes = len(buf)
+        if n > nbytes:
+            n = nbytes
+        if self.chunks:
+            size = self.chunks[self._turn % len(self.chunks)]
+            self._turn += 1
+            if n > size:
+                n = size
+        head = self._head
+        src = self._in
+        for i in range(n):
+            buf[i] = src[head + i]
+        self._head = head + n
+        return n
+
+    def read(self, nbytes=None):
+        n = self.any()
+        if not n:
+            return None
+        buf = bytearray(n if nbytes is None else min(n, nbytes))
+        return bytes(buf[: self.readinto(buf)])
+
+    def write(self, buf, nbytes=None):
+        if nbytes is None:
+            nbytes = len(buf)
+        out = self._out
+        at = self._nout
+        if at + nbytes > len(out):
+            out = self._out = out + bytearray(at + nbytes)
+        for i in range(nbytes):
+            out[at + i] = buf[i]
+        self._nout = at + nbytes
+        self.writes += 1
+        if self._replies:
+            answer = self._replies.get(bytes(out[at : at + nbytes]))
+            if answer:
+                if answer[1]:
+                    self.feed_later(answer[0], answer[1])
+                else:
+                    self.feed(answer[0])
+        return nbytes

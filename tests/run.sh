@@ -1,0 +1,48 @@
+#!/bin/sh
+# The whole test suite: set up the MicroPython unix port (boards/unix.sh), run every
+# tests/test_*.py on it, one process each, and end with the line "N passed, N failed".
+# Exits non-zero if any test failed or any module did not run to its end.
+set -u
+cd "$(dirname "$0")/.."
+sh boards/unix.sh --setup || exit 1
+
+passed=0
+failed=0
+skipped=0
+
+# run_module LABEL MODULE: run one module, show its output, add up its counts. unittest.main()
+# is called here rather than by the module: micropython-unittest 0.4 ends it with
+# sys.exit(failures > 0), which MicroPython prints and turns into exit 1 even when all passed.
+run_module() {
+    out=$(sh boards/unix.sh -c "import sys, unittest
+sys.path.append('tests')
+try:
+    unittest.main('$2')
+except SystemExit:
+    pass" 2>&1)
+    printf '%s\n' "$out" | sed "s|^|$1 |"
+    ran=$(printf '%s\n' "$out" | sed -n 's/^Ran \([0-9]*\) tests*$/\1/p' | tail -n 1)
+    bad=$(printf '%s\n' "$out" | sed -n 's/^FAILED (failures=\([0-9]*\), errors=\([0-9]*\)).*/\1 + \2/p')
+    skip=$(printf '%s\n' "$out" | grep -c '\.\.\. *skipped:')
+    if [ -z "$ran" ]; then
+        echo "$1 did not run to its end"
+        failed=$((failed + 1))
+        return
+    fi
+    bad=$((${bad:-0}))
+    passed=$((passed + ran - bad - skip))
+    failed=$((failed + bad))
+    skipped=$((skipped + skip))
+}
+
+for t in tests/test_*.py; do
+    name=$(basename "$t" .py)
+    run_module "$name:" "$name"
+done
+
+if [ "$skipped" = 0 ]; then
+    echo "$passed passed, $failed failed"
+else
+    echo "$passed passed, $failed failed, $skipped skipped"
+fi
+[ "$failed" = 0 ]

@@ -1,0 +1,268 @@
+# What the driver makes of the frames the controller sends (section II of
+# ../shared/protocol.md, and the replies of section I), however they arrive.
+import unittest
+
+import busservo
+from busservo import (
+    CMD_ACTION_GROUP_COMPLETE,
+    CMD_ACTION_GROUP_RUN,
+    CMD_ACTION_GROUP_STOP,
+    CMD_GET_BATTERY_VOLTAGE,
+    CMD_MULT_SERVO_POS_READ,
+)
+from fakeuart import FakeUART
+
+# The document's own examples.
+RUN_8_ONCE = bytes((0x55, 0x55, 0x05, 0x06, 0x08, 0x01, 0x00))
+STOP = bytes((0x55, 0x55, 0x02, 0x07))
+COMPLETE_8_ONCE = bytes((0x55, 0x55, 0x05, 0x08, 0x08, 0x01, 0x00))
+BATTERY_7500 = bytes((0x55, 0x55, 0x04, 0x0F, 0x4C, 0x1D))
+POSITIONS_ALL_500 = bytes(
+    (0x55, 0x55, 0x15, 0x15, 0x06)
+    + (0x01, 0xF4, 0x01, 0x02, 0xF4, 0x01, 0x03, 0xF4, 0x01)
+    + (0x04, 0xF4, 0x01, 0x05, 0xF4, 0x01, 0x06, 0xF4, 0x01)
+)
+ALL_500 = {1: 500, 2: 500, 3: 500, 4: 500, 5: 500, 6: 500}
+
+# Made by the same rules: group 2 forever, and the longest frame there is
+# (Length 255): 84 servo positions, servo i at 1000 + i.
+RUN_2_FOREVER = bytes((0x55, 0x55, 0x05, 0x06, 0x02, 0x00, 0x00))
+POSITIONS_84 = bytearray((0x55, 0x55, 255, 0x15, 84))
+for i in range(84):
+    POSITIONS_84 += bytes((i, (1000 + i) & 0xFF, (1000 + i) >> 8))
+POSITIONS_84 = bytes(POSITIONS_84)
+UNKNOWN_255 = bytes((0x55, 0x55, 255, 0x63)) + bytes(range(1, 254))
+
+# (frame, its command, the state it leaves behind a fresh BusServo)
+FRAMES = (
+    (RUN_8_ONCE, CMD_ACTION_GROUP_RUN, {"running": True, "group": 8, "times": 1}),
+    (RUN_2_FOREVER, CMD_ACTION_GROUP_RUN, {"running": True, "group": 2, "times": 0}),
+    (STOP, CMD_ACTION_GROUP_STOP, {"running": False, "group": None}),
+    (COMPLETE_8_ONCE, CMD_ACTION_GROUP_COMPLETE, {"running": False, "group": 8, "times": 1}),
+    (BATTERY_7500, CMD_GET_BATTERY_VOLTAGE, {"battery": 7500}),
+    (POSITIONS_ALL_500, CMD_MULT_SERVO_POS_READ, {"positions": ALL_500}),
+    (POSITIONS_84, CMD_MULT_SERVO_POS_READ, {"positions": {i: 1000 + i for i in range(84)}}),
+    (UNKNOWN_255, 0x63, {"running": False, "battery": None, "positions": {}}),
+)
+
+
+def fresh(chunks=None):
+    uart = FakeUART(chunks)
+    return uart, busservo.BusServo(uart)
+
+
+def drain(bus):
+    cmds = []
+    while True:
+        cmd = bus.poll()
+        if cmd is None:
+            return cmds
+        cmds.append(cmd)
+
+
+class Frames(unittest.TestCase):
+    def assertState(self, bus, state, why=""):
+        for name, value in state.items():
+            self.assertEqual(getattr(bus, name), value, "%s %s" % (name, why))
+
+    def test_each_frame_is_decoded_and_applied(self):
+        for frame, cmd, state in FRAMES:
+            uart, bus = fresh()
+            self.assertIsNone(bus.poll())
+            uart.feed(frame)
+            self.assertEqual(bus.poll(), cmd)
+            self.assertState(bus, state)
+            self.assertIsNone(bus.poll())
+
+    def test_initial_state(self):
+        uart, bus = fresh()
+        self.assertState(
+            bus, {"running": False, "group": None, "times": 0, "battery": None, "positions": {}}
+        )
+
+    def test_each_frame_split_at_every_byte(self):
+        for frame, cmd, state in FRAMES:
+            for cut in range(1, len(frame)):
+                uart, bus = fresh()
+                uart.feed(frame[:cut])
+                self.assertIsNone(bus.poll(), "cut at %d" % cut)
+                self.assertEqual(bus.running, False)
+                uart.feed(frame[cut:])
+                self.assertEqual(bus.poll(), cmd, "cut at %d" % cut)
+                self.assertState(bus, state, "cut at %d" % cut)
+                self.assertIsNone(bus.poll())
+
+    def test_each_frame_read_in_chunks_of_every_size(self):
+        # poll() reads all the UART holds before it gives up, however it comes.
+        for frame, cmd, state in FRAMES:
+            for size in (1, 2, 3, 5, 7, 63, 64, 100):
+                uart, bus = fresh([size])
+                uart.feed(frame)
+                self.assertEqual(bus.poll(), cmd, "chunks of %d" % size)
+                self.assertState(bus, state)
+                self.assertIsNone(bus.poll())
+
+    def test_many_frames_in_one_read_one_per_poll(self):
+        uart, bus = fresh()
+        uart.feed(RUN_8_ONCE + BATTERY_7500 + COMPLETE_8_ONCE + RUN_2_FOREVER + STOP)
+        # The state is that of the frame just returned, not of the last one read.
+        self.assertEqual(bus.poll(), CMD_ACTION_GROUP_RUN)
+        self.assertState(bus, {"running": True, "group": 8, "battery": None})
+        self.assertEqual(bus.poll(), CMD_GET_BATTERY_VOLTAGE)
+        self.assertState(bus, {"running": True, "battery": 7500})
+        self.assertEqual(bus.poll(), CMD_ACTION_GROUP_COMPLETE)
+        self.assertState(bus, {"running": False, "group": 8, "times": 1})
+        self.assertEqual(bus.poll(), CMD_ACTION_GROUP_RUN)
+        self.assertState(bus, {"running": True, "group": 2, "times": 0})
+        self.assertEqual(bus.poll(), CMD_ACTION_GROUP_STOP)
+        self.assertState(bus, {"running": False, "group": 2, "times": 0})
+        self.assertIsNone(bus.poll())
+
+    def test_a_stream_of_every_frame_split_anywhere(self):
+        stream = b"".join(f[0] for f in FRAMES)
+        expect = [f[1] for f in FRAMES]
+        for cut in range(0, len(stream), 7):
+            for size in (1, 4, 63):
+                uart, bus = fresh([size])
+                uart.feed(stream[:cut])
+                got = drain(bus)
+                uart.feed(stream[cut:])
+                got += drain(bus)
+                self.assertEqual(got, expect, "cut at %d, chunks of %d" % (cut, size))
+        self.assertEqual(bus.positions[83], 1083)
+
+    def test_state_changes(self):
+        uart, bus = fresh()
+        for frame, running, group, times in (
+            (RUN_8_ONCE, True, 8, 1),
+            (COMPLETE_8_ONCE, False, 8, 1),
+            (RUN_2_FOREVER, True, 2, 0),
+            (STOP, False, 2, 0),  # STOP names no group: the last one stays
+            (STOP, False, 2, 0),
+            (RUN_8_ONCE, True, 8, 1),
+            (STOP, False, 8, 1),
+        ):
+            uart.feed(frame)
+            bus.poll()
+            self.assertEqual((bus.running, bus.group, bus.times), (running, group, times))
+
+    def test_positions_are_updated_in_place(self):
+        uart, bus = fresh()
+        positions = bus.positions
+        positions[7] = 123
+        uart.feed(POSITIONS_ALL_500)
+        bus.poll()
+        self.assertIs(bus.positions, positions)
+        self.assertEqual(positions[7], 123)
+        self.assertEqual(positions[6], 500)
+
+
+class Resync(unittest.TestCase):
+    def assertFrames(self, data, expect, state=None):
+        for size in (1, 3, 64):
+            uart, bus = fresh([size])
+            uart.feed(data)
+            self.assertEqual(drain(bus), expect, "chunks of %d" % size)
+            if state:
+                for name, value in state.items():
+                    self.assertEqual(getattr(bus, name), value, name)
+
+    def test_noise_before_between_and_after_frames(self):
+        noise = bytes((0x00, 0xFF, 0x12, 0x07, 0x05))
+        self.assertFrames(
+            noise + RUN_8_ONCE + noise + BATTERY_7500 + noise,
+            [CMD_ACTION_GROUP_RUN, CMD_GET_BATTERY_VOLTAGE],
+            {"battery": 7500, "group": 8},
+        )
+
+    def test_lone_0x55_bytes(self):
+        self.assertFrames(
+            b"\x55\x12\x55" + STOP + b"\x55" + BATTERY_7500 + b"\x01\x55",
+            [CMD_ACTION_GROUP_STOP, CMD_GET_BATTERY_VOLTAGE],
+        )
+
+    def test_runs_of_0x55_end_in_the_header(self):
+        for run in range(3, 9):
+            self.assertFrames(
+                b"\x55" * (run - 2) + RUN_8_ONCE + b"\x55" * (run - 2) + BATTERY_7500,
+                [CMD_ACTION_GROUP_RUN, CMD_GET_BATTERY_VOLTAGE],
+                {"group": 8, "times": 1, "battery": 7500},
+            )
+
+    def test_impossible_lengths_do_not_swallow_the_frames_behind(self):
+        for bad in (
+            b"\x55\x55\xff\x06",  # RUN must have Length 5
+            b"\x55\x55\x09\x08",  # COMPLETE must have Length 5
+            b"\x55\x55\x05\x07",  # STOP must have Length 2
+            b"\x55\x55\x40\x0f",  # battery must have Length 4
+            b"\x55\x55\x09\x15\x06",  # 6 positions need Length 21
+            b"\x55\x55\x00",  # no frame has Length 0 or 1
+            b"\x55\x55\x01",
+        ):
+            self.assertFrames(
+                bad + RUN_8_ONCE + STOP + BATTERY_7500,
+                [CMD_ACTION_GROUP_RUN, CMD_ACTION_GROUP_STOP, CMD_GET_BATTERY_VOLTAGE],
+                {"battery": 7500, "group": 8},
+            )
+
+    def test_a_rejected_frame_can_hide_the_next_header(self):
+        # 55 55 05 07 is no STOP; the 55 55 02 07 inside it is.
+        self.assertFrames(b"\x55\x55\x05\x07\x55\x55\x02\x07", [CMD_ACTION_GROUP_STOP])
+
+    def test_unknown_commands_are_skipped_whole(self):
+        # Its body looks like a STOP, but it is part of the unknown frame.
+        unknown = bytes((0x55, 0x55, 0x06, 0x63, 0x55, 0x55, 0x02, 0x07))
+        self.assertFrames(
+            unknown + BATTERY_7500 + UNKNOWN_255 + RUN_8_ONCE,
+            [0x63, CMD_GET_BATTERY_VOLTAGE, 0x63, CMD_ACTION_GROUP_RUN],
+            {"running": True, "battery": 7500},
+        )
+
+    def test_commands_the_driver_sends_are_frames_too(self):
+        # Every encoded command is a well-formed frame: the parser agrees, at
+        # every cut, and a RUN echoed back is a RUN. All but the two requests,
+        # which have not the Length of their replies: to the parser, noise.
+        out = FakeUART()
+        sender = busservo.BusServo(out)
+        sender.move(1, 800, 1000)
+        sender.move_many([(i, 500) for i in range(1, 84)], 50)
+        sender.run_group(8)
+        sender.stop_group()
+        sender.set_group_speed(busservo.ALL_GROUPS, 300)
+        sender.request_battery()
+        sender.unload(range(1, 253))
+        sender.request_positions([1, 2, 3, 4, 5, 6])
+        expect = [3, 3, 6, 7, 11, 20]
+        stream = out.written()
+        for cut in range(len(stream)):
+            uart, bus = fresh([17])
+            uart.feed(stream[:cut])
+            got = drain(bus)
+            uart.feed(stream[cut:])
+            self.assertEqual(got + drain(bus), expect, "cut at %d" % cut)
+            self.assertEqual((bus.running, bus.group), (False, 8))
+
+    def test_memory_stays_bounded_under_endless_noise(self):
+        import gc
+
+        junk = bytearray()
+        for i in range(4000):
+            junk.append((i * 37) & 0xFF)
+            if i % 97 == 0:
+                junk += b"\x55\x55"  # headers that come to nothing
+        uart, bus = fresh([50])
+        gc.collect()
+        before = gc.mem_alloc()
+        for _ in range(5):
+            uart.feed(junk)
+            gc.collect()
+            drain(bus)
+        # The junk may end inside an unknown frame: 257 bytes see it through.
+        uart.feed(bytes(257) + STOP)
+        self.assertEqual(drain(bus)[-1:], [CMD_ACTION_GROUP_STOP])
+        gc.collect()
+        self.assertTrue(gc.mem_alloc() - before < 2048, "heap grew with the input")
+
+
+if __name__ == "__main__":
+    unittest.main()
