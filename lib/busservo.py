@@ -8,9 +8,9 @@
 # and 16-bit values travel low byte first. Commands are encoded into one
 # buffer made in __init__; frames from the controller are read into another
 # and decoded where they lie, so neither direction allocates per call.
-from micropython import const
 import errno
 import time
+from micropython import const
 
 CMD_SERVO_MOVE = const(3)
 CMD_ACTION_GROUP_RUN = const(6)

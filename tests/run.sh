@@ -40,6 +40,15 @@ for t in tests/test_*.py; do
     run_module "$name:" "$name"
 done
 
+# One style for everything (.ruff.toml): counted as one test.
+if .venv/bin/ruff check -q . && .venv/bin/ruff format -q --check .; then
+    echo "style: ruff ... ok"
+    passed=$((passed + 1))
+else
+    echo "style: ruff ... FAIL (see above; 'sh boards/unix.sh --setup && .venv/bin/ruff format .')"
+    failed=$((failed + 1))
+fi
+
 if [ "$skipped" = 0 ]; then
     echo "$passed passed, $failed failed"
 else

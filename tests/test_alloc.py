@@ -1,0 +1,90 @@
+# Heap bytes per call, measured as gc.mem_alloc() deltas with the collector
+# off. Exact and repeatable on MicroPython, so these are tests, not benchmarks.
+import gc
+import unittest
+
+import busservo
+from fakeuart import FakeUART
+from test_frames import BATTERY_7500, COMPLETE_8_ONCE, POSITIONS_ALL_500, RUN_8_ONCE, STOP
+
+CALLS = 20
+
+
+def heap_per_call(call, before=None):
+    """Heap bytes that CALLS calls of call() take, after one call to warm up.
+    before() runs ahead of every call, outside the measurement."""
+    if before:
+        before()
+    call()
+    total = 0
+    gc.collect()
+    gc.disable()
+    try:
+        for _ in range(CALLS):
+            if before:
+                before()
+            start = gc.mem_alloc()
+            call()
+            total += gc.mem_alloc() - start
+    finally:
+        gc.enable()
+    return total
+
+
+class Allocation(unittest.TestCase):
+    def setUp(self):
+        self.uart = FakeUART()
+        self.bus = busservo.BusServo(self.uart)
+
+    def assertNoHeap(self, call, before=None):
+        self.assertEqual(heap_per_call(call, before), 0)
+
+    def test_commands_allocate_nothing(self):
+        bus = self.bus
+        six = [(1, 100), (2, 200), (3, 300), (4, 400), (5, 500), (6, 600)]
+        ids = (1, 2, 3, 4, 5, 6)
+        for call in (
+            lambda: bus.move(1, 500, 1000),
+            lambda: bus.move_many(six, 1000),
+            lambda: bus.run_group(8, 1),
+            lambda: bus.stop_group(),
+            lambda: bus.set_group_speed(busservo.ALL_GROUPS, 200),
+            lambda: bus.unload(ids),
+            lambda: bus.request_battery(),
+            lambda: bus.request_positions(ids),
+        ):
+            self.uart.clear()
+            self.assertNoHeap(call)
+
+    def test_idle_poll_allocates_nothing(self):
+        self.assertNoHeap(self.bus.poll)
+
+    def test_decoding_status_and_battery_frames_allocates_nothing(self):
+        for frame in (RUN_8_ONCE, STOP, COMPLETE_8_ONCE, BATTERY_7500, POSITIONS_ALL_500):
+            for chunks in (None, [1], [3]):
+                self.uart.chunks = chunks
+                # feed() allocates, so it runs outside the measurement.
+                self.assertNoHeap(self.bus.poll, lambda f=frame: self.uart.feed(f))
+                self.assertEqual(self.bus.poll(), None)
+
+    def test_a_split_frame_allocates_nothing(self):
+        # Half a frame now, the rest later: the chunked path, with the slide.
+        state = [0]
+
+        def half():
+            state[0] ^= 1
+            self.uart.feed(RUN_8_ONCE[:3] if state[0] else RUN_8_ONCE[3:] + b"\x00" * 61)
+
+        self.assertNoHeap(self.bus.poll, half)
+
+    def test_the_fake_uart_itself_allocates_nothing(self):
+        # Else the figures above would measure the fake, not the driver.
+        buf = bytearray(8)
+        self.uart.feed(bytes(200))
+        self.assertNoHeap(lambda: self.uart.readinto(buf, 8))
+        self.assertNoHeap(lambda: self.uart.write(buf, 8))
+        self.assertNoHeap(self.uart.any)
+
+
+if __name__ == "__main__":
+    unittest.main()

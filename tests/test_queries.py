@@ -1,0 +1,149 @@
+# Blocking queries: read_battery() and read_positions() against a fake
+# controller that answers (or not) what the driver writes.
+import errno
+import time
+import unittest
+
+import busservo
+from busservo import (
+    CMD_ACTION_GROUP_COMPLETE,
+    CMD_ACTION_GROUP_RUN,
+    CMD_ACTION_GROUP_STOP,
+    CMD_GET_BATTERY_VOLTAGE,
+    CMD_MULT_SERVO_POS_READ,
+)
+from fakeuart import FakeUART
+from test_frames import ALL_500, BATTERY_7500, COMPLETE_8_ONCE, POSITIONS_ALL_500, RUN_8_ONCE, STOP
+
+GET_BATTERY = bytes((0x55, 0x55, 0x02, 0x0F))
+READ_1_TO_6 = bytes((0x55, 0x55, 0x09, 0x15, 0x06, 0x01, 0x02, 0x03, 0x04, 0x05, 0x06))
+BATTERY_7400 = bytes((0x55, 0x55, 0x04, 0x0F, 0xE8, 0x1C))
+
+
+def timed_out(call):
+    try:
+        call()
+    except OSError as e:
+        return e.args[0] == errno.ETIMEDOUT
+    return False
+
+
+class Queries(unittest.TestCase):
+    def setUp(self):
+        self.uart = FakeUART()
+        self.bus = busservo.BusServo(self.uart)
+
+    def test_read_battery(self):
+        self.uart.reply(GET_BATTERY, BATTERY_7500)
+        self.assertEqual(self.bus.read_battery(), 7500)
+        self.assertEqual(self.uart.written(), GET_BATTERY)
+        self.assertEqual(self.bus.battery, 7500)
+        self.assertIsNone(self.bus.poll())  # the reply was the query's, not poll()'s
+
+    def test_read_positions(self):
+        self.uart.reply(READ_1_TO_6, POSITIONS_ALL_500)
+        self.assertEqual(self.bus.read_positions([1, 2, 3, 4, 5, 6]), ALL_500)
+        self.assertEqual(self.uart.written(), READ_1_TO_6)
+        self.assertEqual(self.bus.positions, ALL_500)
+        self.assertIsNone(self.bus.poll())
+
+    def test_read_positions_returns_this_reply_only(self):
+        self.bus.positions[9] = 321
+        self.uart.reply(READ_1_TO_6, POSITIONS_ALL_500)
+        self.assertEqual(self.bus.read_positions([1, 2, 3, 4, 5, 6]), ALL_500)
+        self.assertEqual(self.bus.positions[9], 321)
+
+    def test_a_reply_that_takes_its_time(self):
+        self.uart.chunks = [1]
+        self.uart.reply(GET_BATTERY, BATTERY_7500, delay_ms=30)
+        self.assertEqual(self.bus.read_battery(timeout_ms=2000), 7500)
+
+    def test_returns_as_soon_as_the_reply_is_complete(self):
+        # No fixed sleep: with the reply there at once, a 5 s timeout is not waited out.
+        self.uart.reply(GET_BATTERY, BATTERY_7500)
+        start = time.ticks_ms()
+        self.bus.read_battery(timeout_ms=5000)
+        self.assertTrue(time.ticks_diff(time.ticks_ms(), start) < 1000)
+
+    def test_no_reply_times_out(self):
+        start = time.ticks_ms()
+        self.assertTrue(timed_out(lambda: self.bus.read_battery(timeout_ms=30)))
+        self.assertTrue(time.ticks_diff(time.ticks_ms(), start) >= 30)
+        self.assertTrue(timed_out(lambda: self.bus.read_positions([1, 2], timeout_ms=10)))
+        self.assertTrue(timed_out(lambda: self.bus.read_battery(timeout_ms=0)))
+
+    def test_a_half_reply_times_out(self):
+        self.uart.reply(GET_BATTERY, BATTERY_7500[:5])
+        self.assertTrue(timed_out(lambda: self.bus.read_battery(timeout_ms=20)))
+        self.assertIsNone(self.bus.battery)
+
+    def test_the_default_timeouts(self):
+        start = time.ticks_ms()
+        self.assertTrue(timed_out(self.bus.read_battery))
+        battery = time.ticks_diff(time.ticks_ms(), start)
+        start = time.ticks_ms()
+        self.assertTrue(timed_out(lambda: self.bus.read_positions([1, 2, 3, 4, 5, 6])))
+        positions = time.ticks_diff(time.ticks_ms(), start)
+        self.assertTrue(battery >= 100, battery)
+        self.assertTrue(positions >= 160, positions)  # 100 ms + 10 ms per servo
+
+    def test_a_status_frame_during_a_query_waits_for_poll(self):
+        self.uart.reply(GET_BATTERY, COMPLETE_8_ONCE + BATTERY_7500)
+        self.assertEqual(self.bus.read_battery(), 7500)
+        self.assertEqual(self.bus.group, 8)  # applied to the state at once
+        self.assertEqual(self.bus.poll(), CMD_ACTION_GROUP_COMPLETE)
+        self.assertIsNone(self.bus.poll())
+
+    def test_frames_waiting_before_a_query_keep_their_order(self):
+        self.uart.feed(RUN_8_ONCE)
+        self.uart.feed_later(STOP, 0)
+        self.uart.reply(READ_1_TO_6, COMPLETE_8_ONCE + POSITIONS_ALL_500)
+        self.bus.read_positions(range(1, 7))
+        got = [self.bus.poll(), self.bus.poll(), self.bus.poll(), self.bus.poll()]
+        self.assertEqual(
+            got, [CMD_ACTION_GROUP_RUN, CMD_ACTION_GROUP_STOP, CMD_ACTION_GROUP_COMPLETE, None]
+        )
+
+    def test_a_stale_reply_is_not_taken_for_the_answer(self):
+        # A reply to an earlier request_battery() that nobody polled yet.
+        self.bus.request_battery()
+        self.uart.feed(BATTERY_7500)
+        self.uart.reply(GET_BATTERY, BATTERY_7400)
+        self.assertEqual(self.bus.read_battery(), 7400)
+        self.assertEqual(self.bus.poll(), CMD_GET_BATTERY_VOLTAGE)
+        self.assertIsNone(self.bus.poll())
+        self.assertEqual(self.bus.battery, 7400)
+
+    def test_requests_answered_through_poll(self):
+        self.uart.reply(GET_BATTERY, BATTERY_7500, delay_ms=5)
+        self.uart.reply(READ_1_TO_6, POSITIONS_ALL_500, delay_ms=5)
+        self.bus.request_battery()
+        self.bus.request_positions([1, 2, 3, 4, 5, 6])
+        got = []
+        start = time.ticks_ms()
+        while len(got) < 2 and time.ticks_diff(time.ticks_ms(), start) < 2000:
+            cmd = self.bus.poll()
+            if cmd is not None:
+                got.append(cmd)
+        self.assertEqual(got, [CMD_GET_BATTERY_VOLTAGE, CMD_MULT_SERVO_POS_READ])
+        self.assertEqual((self.bus.battery, self.bus.positions), (7500, ALL_500))
+
+    def test_more_frames_than_the_queue_holds_are_counted_not_hidden(self):
+        self.uart.reply(GET_BATTERY, STOP * 40 + BATTERY_7500)
+        self.assertEqual(self.bus.read_battery(), 7500)
+        held = 0
+        while self.bus.poll() is not None:
+            held += 1
+        self.assertEqual(held, 32)
+        self.assertEqual(self.bus.lost, 8)
+
+    def test_a_query_with_bad_arguments_reads_nothing_away(self):
+        self.uart.feed(STOP)
+        with self.assertRaises(ValueError):
+            self.bus.read_positions([1, 300])
+        self.assertEqual(self.bus.poll(), CMD_ACTION_GROUP_STOP)
+        self.assertEqual(self.uart.writes, 0)
+
+
+if __name__ == "__main__":
+    unittest.main()
