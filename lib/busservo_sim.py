@@ -1,0 +1,245 @@
+# busservo_sim: a simulated Bus Servo Controller, for trying busservo with no
+# controller wired (at a board's REPL, or on the unix port).
+#
+#   import busservo, busservo_sim
+#   sim = busservo_sim.SimController()
+#   bus = busservo.BusServo(sim)    # sim has machine.UART's any/read/readinto/write
+#
+# It decodes what the driver writes and answers as ../shared/protocol.md says:
+# - servos move linearly from where they are to their target over time_ms, so a
+#   position read mid-move gives the value in between (servos start at 500);
+# - action groups (`groups`, {group: ms per run}) run `times` times or forever,
+#   sending RUN as they start, COMPLETE as they end, STOP when stopped (by a STOP
+#   command, or by a RUN of another group);
+# - ACTION_GROUP_SPEED scales a group's durations (ALL_GROUPS: every group);
+#   power_cycle() forgets it, as the controller does at power-off;
+# - unload lets servos go limp where they are (`limp`) until they are moved;
+# - the battery reads `battery` mV;
+# - a malformed frame counts one `beeps` (the controller's "beep beep").
+# Time comes from time.ticks_ms(), or from the ticks_ms function given, which a
+# test can step. Setting `silent` makes it answer nothing at all, as a controller
+# with its TX unplugged; so does the frame 55 55 03 F0 01 (F0 00 undoes it),
+# which a real controller would beep at.
+import time
+
+from busservo import (
+    ALL_GROUPS,
+    CMD_ACTION_GROUP_COMPLETE,
+    CMD_ACTION_GROUP_RUN,
+    CMD_ACTION_GROUP_SPEED,
+    CMD_ACTION_GROUP_STOP,
+    CMD_GET_BATTERY_VOLTAGE,
+    CMD_MULT_SERVO_POS_READ,
+    CMD_MULT_SERVO_UNLOAD,
+    CMD_SERVO_MOVE,
+)
+
+SIM_SILENT = 0xF0  # the simulator's own command: Prm 1 = 1 silent, 0 talking
+GROUPS = {0: 1000, 1: 500, 2: 2000, 8: 1500}  # default action groups, ms per run
+CENTER = 500  # where a servo starts
+
+
+class SimController:
+    def __init__(self, groups=None, battery=7500, ticks_ms=time.ticks_ms):
+        self.groups = dict(GROUPS if groups is None else groups)
+        self.battery = battery
+        self.silent = False
+        self.beeps = 0
+        self.limp = set()
+        self._ticks_ms = ticks_ms
+        self._servos = {}  # id: (from, to, start ticks, time_ms)
+        self._in = bytearray()  # written by the driver, not yet decoded
+        self._out = bytearray()  # for the driver to read
+        self.power_cycle()
+
+    def power_cycle(self):
+        """Power off and on: groups stop (silently) and speeds are forgotten."""
+        self._speed = {}  # group: percent
+        self._running = None  # (group, times, end ticks, or None for forever)
+        self._in = bytearray()
+        self._out = bytearray()
+
+    def position(self, servo_id):
+        """Where servo_id is now."""
+        start, target, t0, time_ms = self._servos.get(servo_id, (CENTER, CENTER, 0, 0))
+        done = time.ticks_diff(self._ticks_ms(), t0)
+        if done >= time_ms:
+            return target
+        return start + (target - start) * done // time_ms
+
+    def speed(self, group):
+        """The group's speed in percent."""
+        return self._speed.get(group, 100)
+
+    @property
+    def running(self):
+        """The group running now, or None."""
+        self._tick()
+        return self._running and self._running[0]
+
+    # machine.UART's methods, as the driver sees them.
+
+    def any(self):
+        self._tick()
+        return len(self._out)
+
+    def readinto(self, buf, nbytes=None):
+        n = min(self.any(), len(buf) if nbytes is None else nbytes)
+        if not n:
+            return None
+        buf[:n] = self._out[:n]
+        self._out = self._out[n:]
+        return n
+
+    def read(self, nbytes=None):
+        n = self.any() if nbytes is None else min(self.any(), nbytes)
+        if not n:
+            return None
+        data = bytes(self._out[:n])
+        self._out = self._out[n:]
+        return data
+
+    def write(self, buf, nbytes=None):
+        n = len(buf) if nbytes is None else nbytes
+        self._in += buf[:n]
+        self._tick()
+        self._decode()
+        return n
+
+    # The controller.
+
+    def _send(self, cmd, *params):
+        if not self.silent:
+            self._out += bytes((0x55, 0x55, len(params) + 2, cmd) + params)
+
+    def _tick(self):
+        # An action group that has run its course completes.
+        run = self._running
+        if run and run[2] is not None and time.ticks_diff(self._ticks_ms(), run[2]) >= 0:
+            self._running = None
+            self._send(CMD_ACTION_GROUP_COMPLETE, run[0], run[1] & 0xFF, run[1] >> 8)
+
+    def _decode(self):
+        d = self._in
+        i = 0
+        while len(d) - i >= 4:
+            if d[i] != 0x55 or d[i + 1] != 0x55 or d[i + 2] == 0x55:
+                i += 1
+                continue
+            cmd = d[i + 3]
+            if cmd in (CMD_SERVO_MOVE, CMD_MULT_SERVO_UNLOAD, CMD_MULT_SERVO_POS_READ):
+                if len(d) - i < 5:
+                    break
+                per = 3 if cmd == CMD_SERVO_MOVE else 1
+                length = per * d[i + 4] + per + 2
+            else:
+                length = _LENGTHS.get(cmd)
+            if length != d[i + 2]:  # malformed or unknown: beep, look again
+                self.beeps += 1
+                i += 1
+                continue
+            if len(d) - i < length + 2:
+                break
+            self._do(cmd, bytes(d[i + 4 : i + length + 2]))
+            i += length + 2
+        self._in = d[i:]
+
+    def _do(self, cmd, p):
+        now = self._ticks_ms()
+        if cmd == CMD_SERVO_MOVE:
+            time_ms = p[1] | p[2] << 8
+            for k in range(3, 3 * p[0] + 3, 3):
+                servo_id = p[k]
+                self._servos[servo_id] = (
+                    self.position(servo_id),
+                    p[k + 1] | p[k + 2] << 8,
+                    now,
+                    time_ms,
+                )
+                self.limp.discard(servo_id)
+        elif cmd == CMD_ACTION_GROUP_RUN:
+            group, times = p[0], p[1] | p[2] << 8
+            if group not in self.groups:
+                self.beeps += 1
+                return
+            if self.running is not None:
+                self._running = None
+                self._send(CMD_ACTION_GROUP_STOP)
+            end = None
+            if times:
+                run_ms = self.groups[group] * 100 // self.speed(group)
+                end = time.ticks_add(now, times * run_ms)
+            self._running = (group, times, end)
+            self._send(CMD_ACTION_GROUP_RUN, group, p[1], p[2])
+        elif cmd == CMD_ACTION_GROUP_STOP:
+            if self.running is not None:
+                self._running = None
+                self._send(CMD_ACTION_GROUP_STOP)
+        elif cmd == CMD_ACTION_GROUP_SPEED:
+            percent = p[1] | p[2] << 8
+            if not percent:
+                self.beeps += 1
+                return
+            for group in self.groups if p[0] == ALL_GROUPS else (p[0],):
+                self._speed[group] = percent
+        elif cmd == CMD_GET_BATTERY_VOLTAGE:
+            self._send(CMD_GET_BATTERY_VOLTAGE, self.battery & 0xFF, self.battery >> 8)
+        elif cmd == CMD_MULT_SERVO_UNLOAD:
+            for servo_id in p[1:]:
+                here = self.position(servo_id)
+                self._servos[servo_id] = (here, here, now, 0)
+                self.limp.add(servo_id)
+        elif cmd == CMD_MULT_SERVO_POS_READ:
+            reply = [p[0]]
+            for servo_id in p[1:]:
+                here = self.position(servo_id)
+                reply += (servo_id, here & 0xFF, here >> 8)
+            self._send(CMD_MULT_SERVO_POS_READ, *reply)
+        elif cmd == SIM_SILENT:
+            self.silent = bool(p[0])
+
+
+# Length of each fixed-size command the controller takes.
+_LENGTHS = {
+    CMD_ACTION_GROUP_RUN: 5,
+    CMD_ACTION_GROUP_STOP: 2,
+    CMD_ACTION_GROUP_SPEED: 5,
+    CMD_GET_BATTERY_VOLTAGE: 2,
+    SIM_SILENT: 3,
+}
+
+
+def uart():
+    """A board file's uart(), for when there is no board: the simulated controller."""
+    return SimController()
+
+
+def serve(stream_in, stream_out):
+    """Be the controller on a byte stream: what stream_in brings is written to a
+    SimController, what it answers goes to stream_out. Runs until stream_in ends."""
+    import select
+
+    sim = SimController()
+    poller = select.poll()
+    poller.register(stream_in, select.POLLIN)
+    buf = bytearray(1)
+    while True:
+        # One byte per poll, so a blocking stream cannot block; 5 ms at most
+        # between looks, so COMPLETE goes out on time.
+        for _, event in poller.poll(5):
+            if event & (select.POLLHUP | select.POLLERR):
+                return
+            n = stream_in.readinto(buf, 1)
+            if n == 0:
+                return  # end of stream
+            if n:
+                sim.write(buf, 1)
+        data = sim.read()
+        if data:
+            stream_out.write(data)
+
+
+if __name__ == "__main__":
+    import sys
+
+    serve(sys.stdin.buffer, sys.stdout.buffer)

@@ -1,0 +1,104 @@
+# End to end: the simulated controller behind a pty in one process
+# (sh boards/unix.sh --sim-pty), the driver in this one, talking through
+# boards/unix.py as it would through a USB-serial adapter. Real time, real bytes.
+import errno
+import os
+import time
+import unittest
+
+import busservo
+from busservo import (
+    CMD_ACTION_GROUP_COMPLETE,
+    CMD_ACTION_GROUP_RUN,
+    CMD_ACTION_GROUP_STOP,
+)
+from unix import uart
+
+
+def wait_for(path, ms):
+    start = time.ticks_ms()
+    while time.ticks_diff(time.ticks_ms(), start) < ms:
+        try:
+            os.stat(path)
+            return True
+        except OSError:
+            time.sleep_ms(20)
+    return False
+
+
+class EndToEnd(unittest.TestCase):
+    def setUp(self):
+        self.link = "/tmp/busservo-e2e-%s" % "".join("%02x" % b for b in os.urandom(6))
+        os.system(
+            "sh boards/unix.sh --sim-pty --link %s >%s.log 2>&1 & echo $! >%s.pid"
+            % (self.link, self.link, self.link)
+        )
+        self.assertTrue(wait_for(self.link, 10000), "the simulator did not start")
+        self.uart = uart(self.link)
+        self.bus = busservo.BusServo(self.uart)
+
+    def tearDown(self):
+        self.uart.close()
+        os.system("kill $(cat {0}.pid) 2>/dev/null; rm -f {0}.pid {0}.log".format(self.link))
+
+    def events_until(self, want, ms):
+        got = []
+        start = time.ticks_ms()
+        while want not in got and time.ticks_diff(time.ticks_ms(), start) < ms:
+            cmd = self.bus.poll()
+            if cmd is not None:
+                got.append(cmd)
+        return got
+
+    def test_move_and_read_back_during_and_after(self):
+        bus = self.bus
+        bus.move_many([(1, 900), (2, 100), (3, 500)], 1500)
+        start = time.ticks_ms()
+        time.sleep_ms(300)
+        mid = bus.read_positions([1, 2, 3])
+        self.assertTrue(500 < mid[1] < 900, mid)
+        self.assertTrue(100 < mid[2] < 500, mid)
+        self.assertEqual(mid[3], 500)
+        time.sleep_ms(1600 - time.ticks_diff(time.ticks_ms(), start))
+        self.assertEqual(bus.read_positions([1, 2, 3]), {1: 900, 2: 100, 3: 500})
+        self.assertEqual(bus.positions, {1: 900, 2: 100, 3: 500})
+
+    def test_a_group_runs_and_completes(self):
+        self.bus.run_group(1)  # 500 ms in the simulator
+        got = self.events_until(CMD_ACTION_GROUP_COMPLETE, 5000)
+        self.assertEqual(got, [CMD_ACTION_GROUP_RUN, CMD_ACTION_GROUP_COMPLETE])
+        self.assertEqual((self.bus.running, self.bus.group, self.bus.times), (False, 1, 1))
+
+    def test_a_forever_group_is_stopped(self):
+        self.bus.run_group(2, 0)
+        self.assertEqual(self.events_until(CMD_ACTION_GROUP_RUN, 5000), [CMD_ACTION_GROUP_RUN])
+        self.assertTrue(self.bus.running)
+        self.bus.stop_group()
+        self.assertEqual(self.events_until(CMD_ACTION_GROUP_STOP, 5000), [CMD_ACTION_GROUP_STOP])
+        self.assertFalse(self.bus.running)
+
+    def test_battery_speed_and_unload(self):
+        self.assertEqual(self.bus.read_battery(), 7500)
+        self.bus.set_group_speed(2, 1000)  # 2000 ms at 1000 %: 200 ms
+        self.bus.run_group(2)
+        start = time.ticks_ms()
+        self.events_until(CMD_ACTION_GROUP_COMPLETE, 5000)
+        self.assertTrue(time.ticks_diff(time.ticks_ms(), start) < 1500)  # not 2000
+        self.bus.move(4, 800, 0)
+        self.bus.unload([4])
+        self.assertEqual(self.bus.read_positions([4]), {4: 800})
+
+    def test_a_silent_controller_times_out(self):
+        self.uart.write(bytes((0x55, 0x55, 0x03, 0xF0, 0x01)))  # the simulator's "be silent"
+        start = time.ticks_ms()
+        try:
+            self.bus.read_battery(timeout_ms=200)
+        except OSError as e:
+            self.assertEqual(e.args[0], errno.ETIMEDOUT)
+        else:
+            self.fail("no timeout")
+        self.assertTrue(time.ticks_diff(time.ticks_ms(), start) >= 200)
+
+
+if __name__ == "__main__":
+    unittest.main()
