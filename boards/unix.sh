@@ -48,6 +48,7 @@ get_unittest() {
 }
 
 if [ "$(cat $VENV/ready 2>/dev/null)" != "$PINS $UNITTEST_SHA256" ]; then
+    echo "boards/unix.sh: setting up the MicroPython unix port in $VENV/ (first run only)" >&2
     rm -rf $VENV
     python3 -m venv $VENV || { echo "boards/unix.sh: python3 -m venv failed" >&2; exit 1; }
     : >"$LOG"
