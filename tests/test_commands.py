@@ -1,5 +1,6 @@
 # What the driver writes, byte for byte against the worked examples of
 # section I of ../shared/protocol.md, and what it refuses to write.
+import os
 import unittest
 
 import busservo
@@ -115,6 +116,15 @@ class Commands(unittest.TestCase):
             ),
             (3, 6, 7, 8, 11, 15, 20, 21, 0xFF),
         )
+
+
+class ModuleUnderTest(unittest.TestCase):
+    def test_the_suite_tests_the_module_it_says(self):
+        # tests/run.sh runs everything twice: on lib/busservo.py, then with
+        # BUSSERVO_LIB=.venv/mpy on the compiled busservo.mpy alone.
+        lib = os.getenv("BUSSERVO_LIB") or "lib"
+        kind = "py" if lib == "lib" else "mpy"
+        self.assertEqual(busservo.__file__, "%s/busservo.%s" % (lib, kind))
 
 
 # (method, arguments, exception, words the message must contain)

@@ -8,6 +8,7 @@ from busservo import (
     CMD_ACTION_GROUP_STOP,
 )
 from busservo_sim import SimController
+from test_frames import drain as events
 
 
 class Clock:
@@ -19,15 +20,6 @@ class Clock:
 
     def step(self, ms):
         self.now += ms
-
-
-def events(bus):
-    got = []
-    while True:
-        cmd = bus.poll()
-        if cmd is None:
-            return got
-        got.append(cmd)
 
 
 class Simulator(unittest.TestCase):

@@ -1,0 +1,11 @@
+# ESP32: UART2 on GPIO17 (TX) and GPIO16 (RX), 9600 baud.
+# Copy to the board as board.py: mpremote cp boards/esp32.py :board.py
+#
+# Wiring: GPIO17 (TX) to the controller's RX, GPIO16 (RX) to its TX, GND to GND.
+# The servos take their power from the controller's supply, never from the ESP32.
+# (UART0 is the REPL's; UART1's default pins are the flash's on most modules.)
+from machine import UART
+
+
+def uart():
+    return UART(2, baudrate=9600, tx=17, rx=16)

@@ -1,0 +1,11 @@
+# Raspberry Pi Pico (rp2): UART0 on GP0 (TX) and GP1 (RX), 9600 baud.
+# Copy to the board as board.py: mpremote cp boards/rp2.py :board.py
+#
+# Wiring: GP0 (pin 1, TX) to the controller's RX, GP1 (pin 2, RX) to its TX, GND
+# (pin 3) to GND. The servos take their power from the controller's supply, never
+# from the Pico. The REPL is on USB, so UART0 is free.
+from machine import UART, Pin
+
+
+def uart():
+    return UART(0, baudrate=9600, tx=Pin(0), rx=Pin(1))

@@ -1,0 +1,50 @@
+# Shell commands from tests on the unix port, which has os.system() and no subprocess.
+import os
+import time
+
+MICROPYTHON = ".venv/bin/micropython"
+MPREMOTE = ".venv/bin/mpremote"
+
+
+def scratch(name):
+    """A fresh path under /tmp for this run."""
+    return "/tmp/busservo-%s-%s" % (name, "".join("%02x" % b for b in os.urandom(4)))
+
+
+def sh(command):
+    """Run command with sh; return (True if it exited 0, what it printed)."""
+    out = scratch("out")
+    status = os.system("(%s) >%s 2>&1" % (command, out))
+    with open(out) as f:
+        text = f.read()
+    os.remove(out)
+    return status == 0, text
+
+
+def start(command, log):
+    """Start command in the background, its output to log; return its pid."""
+    ok, pid = sh("%s >%s 2>&1 & echo $!" % (command, log))
+    return int(pid)
+
+
+def stop(pid):
+    os.system("kill %d 2>/dev/null" % pid)
+
+
+def wait_for(path, ms=10000, text=None):
+    """Wait until path exists, or with text, until the file holds text; then
+    return True, or with text, the file's content. None if it does not come."""
+    start = time.ticks_ms()
+    while time.ticks_diff(time.ticks_ms(), start) < ms:
+        try:
+            if text is None:
+                os.stat(path)  # not open(): path may be a pty
+                return True
+            with open(path) as f:
+                content = f.read()
+            if text in content:
+                return content
+        except OSError:
+            pass
+        time.sleep_ms(20)
+    return None
