@@ -7,6 +7,15 @@ set -u
 cd "$(dirname "$0")/.."
 sh boards/unix.sh --setup || exit 1
 
+# socat (a Debian package) puts the unix port's REPL behind a pty for the mpremote test.
+if ! command -v socat >/dev/null 2>&1 && command -v apt-get >/dev/null 2>&1; then
+    echo "tests/run.sh: installing socat" >&2
+    sudo=""
+    [ "$(id -u)" = 0 ] || sudo="sudo -n"
+    { $sudo apt-get update -qq && $sudo apt-get install -y -qq socat; } >/dev/null 2>&1 ||
+        echo "tests/run.sh: could not install socat: the mpremote test will be skipped" >&2
+fi
+
 passed=0
 failed=0
 skipped=0
