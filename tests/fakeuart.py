@@ -33,11 +33,18 @@ class FakeUART:
 
     def feed_later(self, data, delay_ms):
         """Make data readable delay_ms from now."""
-        self._later.append((time.ticks_add(time.ticks_ms(), delay_ms), bytes(data)))
+        due = time.ticks_add(time.ticks_ms(), delay_ms)
+        at = len(self._later)
+        while at and time.ticks_diff(self._later[at - 1][0], due) > 0:
+            at -= 1  # keep them in the order they are due
+        self._later.insert(at, (due, bytes(data)))
 
     def reply(self, request, response, delay_ms=0):
-        """Answer every write of exactly `request` with `response`."""
-        self._replies[bytes(request)] = (bytes(response), delay_ms)
+        """Answer every write of exactly `request` with `response`, or with
+        each of a list of responses in turn, one a write."""
+        if not isinstance(response, list):
+            response = [response] * 1000
+        self._replies[bytes(request)] = ([bytes(r) for r in response], delay_ms)
 
     def written(self):
         return bytes(self._out[: self._nout])
@@ -97,9 +104,10 @@ class FakeUART:
         self.writes += 1
         if self._replies:
             answer = self._replies.get(bytes(out[at : at + nbytes]))
-            if answer:
+            if answer and answer[0]:
+                response = answer[0].pop(0)
                 if answer[1]:
-                    self.feed_later(answer[0], answer[1])
+                    self.feed_later(response, answer[1])
                 else:
-                    self.feed(answer[0])
+                    self.feed(response)
         return nbytes

@@ -6,6 +6,7 @@ import unittest
 from shell import sh
 
 EXPECT = {
+    "async_demo.py": "action group 1 completed",
     "battery.py": "battery: 7.50 V",
     "demo.py": "action group 1 completed",
     "group.py": "frame 7 running: False group: 2 times: 0",

@@ -128,8 +128,10 @@ class Manifest(unittest.TestCase):
     def test_the_manifest_freezes_files_that_exist(self):
         named, meta = self.run_manifest()
         self.assertEqual(named, ["lib/busservo.py"])
-        named, meta = self.run_manifest(sim=True)
-        self.assertEqual(named, ["lib/busservo.py", "lib/busservo_sim.py"])
+        named, meta = self.run_manifest(sim=True, asyncio=True)
+        self.assertEqual(
+            named, ["lib/busservo.py", "lib/busservo_sim.py", "lib/busservo_async.py"]
+        )
         for path in named:
             os.stat(path)
         self.assertEqual(meta["version"], version_of_package_json())
