@@ -31,7 +31,8 @@ _TIMEOUT_PER_ID_MS = const(10)  # 4 more bytes on the wire and one servo to ask
 _TICKS_HALF = const(0x1FFFFFFF)  # the longest span time.ticks_diff() can tell
 
 # Builtins are slow to look up; module globals are quick. The hot paths check
-# their arguments' types with these.
+# their arguments' types with these. (They store 16-bit values' low bytes with
+# no mask: a MicroPython bytearray keeps the low 8 bits of what it is given.)
 _type = type
 _int = int
 
@@ -80,9 +81,7 @@ class BusServo:
     def move(self, servo_id, position, time_ms):
         """CMD_SERVO_MOVE: move one servo to position within time_ms."""
         if (
-            _type(servo_id) is not _int
-            or _type(position) is not _int
-            or _type(time_ms) is not _int
+            not (_type(servo_id) is _type(position) is _type(time_ms) is _int)
             or servo_id >> 8
             or (position | time_ms) >> 16
         ):  # one quick test for the usual case; _check() says what is wrong
@@ -90,10 +89,10 @@ class BusServo:
             _check("position", position, 0, 0xFFFF)
             _check("time_ms", time_ms, 0, 0xFFFF)
         frame = self._move
-        frame[5] = time_ms & 0xFF
+        frame[5] = time_ms
         frame[6] = time_ms >> 8
         frame[7] = servo_id
-        frame[8] = position & 0xFF
+        frame[8] = position
         frame[9] = position >> 8
         self._write(frame)
 
@@ -120,11 +119,11 @@ class BusServo:
                 _check("servo_id in servos", servo_id, 0, 0xFF)
                 _check("position in servos", position, 0, 0xFFFF)
             tx[i] = servo_id
-            tx[i + 1] = position & 0xFF
+            tx[i + 1] = position
             tx[i + 2] = position >> 8
             i += 3
         tx[4] = n
-        tx[5] = time_ms & 0xFF
+        tx[5] = time_ms
         tx[6] = time_ms >> 8
         self._send(CMD_SERVO_MOVE, 3 * n + 3)
 
@@ -159,7 +158,7 @@ class BusServo:
         _check(name, value, 0, 0xFFFF)
         tx = self._tx
         tx[4] = group
-        tx[5] = value & 0xFF
+        tx[5] = value
         tx[6] = value >> 8
         self._send(cmd, 3)
 

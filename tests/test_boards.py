@@ -66,6 +66,16 @@ class Boards(unittest.TestCase):
         uart = ("UART", (0,), {"baudrate": 115200})
         self.assertEqual(os.calls[-1], ("dupterm", uart, 1))
 
+    def test_unix_names_a_device_it_cannot_open(self):
+        from unix import uart
+
+        try:
+            uart("/nonexistent/ttyUSB9")
+        except OSError as e:
+            self.assertIn("/nonexistent/ttyUSB9", str(e))
+        else:
+            self.fail("no OSError")
+
     def test_every_board_file_says_how_to_wire_it(self):
         for name in ("esp32", "rp2", "stm32", "esp8266", "unix"):
             with open("boards/%s.py" % name) as f:
