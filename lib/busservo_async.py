@@ -140,24 +140,23 @@ class AsyncBusServo:
                 return
             if cmd == CMD_ACTION_GROUP_COMPLETE or cmd == CMD_ACTION_GROUP_STOP:
                 self._ended = cmd
-            taken = False
             for waiter in self._waiters:
                 if waiter[2] is None and cmd in waiter[0]:
                     waiter[2] = cmd
-                    if waiter[1]:
-                        taken = True
+                    if waiter[1]:  # a query's reply: the query takes it
                         if cmd == CMD_MULT_SERVO_POS_READ:
                             waiter[2] = self._reply_positions()
                         break
-            if taken:
-                continue
-            if len(self._held) < self._queue:
-                self._held.append(cmd)
-            else:
-                self.lost += 1
+            else:  # nobody took it: hold it for events() and poll()
+                if len(self._held) < self._queue:
+                    self._held.append(cmd)
+                else:
+                    self.lost += 1
 
     def _reply_positions(self):
-        # The reply just decoded still lies in the driver's receive buffer.
+        # The reply just decoded still lies in the driver's receive buffer. (The
+        # twin of the loop in BusServo.read_positions(): a shared method there
+        # would take busservo.py's RAM past its 8 KB target.)
         rx = self.bus._rx
         f = self.bus._f
         return {rx[i]: rx[i + 1] | rx[i + 2] << 8 for i in range(f + 5, f + 5 + 3 * rx[f + 4], 3)}
