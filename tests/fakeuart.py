@@ -42,9 +42,11 @@ class FakeUART:
     def reply(self, request, response, delay_ms=0):
         """Answer every write of exactly `request` with `response`, or with
         each of a list of responses in turn, one a write."""
-        if not isinstance(response, list):
-            response = [response] * 1000
-        self._replies[bytes(request)] = ([bytes(r) for r in response], delay_ms)
+        if isinstance(response, list):
+            response = [bytes(r) for r in response]  # taken one a write
+        else:
+            response = bytes(response)  # the same every time
+        self._replies[bytes(request)] = (response, delay_ms)
 
     def written(self):
         return bytes(self._out[: self._nout])
@@ -104,8 +106,10 @@ class FakeUART:
         self.writes += 1
         if self._replies:
             answer = self._replies.get(bytes(out[at : at + nbytes]))
-            if answer and answer[0]:
-                response = answer[0].pop(0)
+            response = answer and answer[0]
+            if isinstance(response, list):
+                response = response.pop(0) if response else None
+            if response:
                 if answer[1]:
                     self.feed_later(response, answer[1])
                 else:
