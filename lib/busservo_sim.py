@@ -63,7 +63,7 @@ class SimController:
         """Where servo_id is now."""
         start, target, t0, time_ms = self._servos.get(servo_id, (CENTER, CENTER, 0, 0))
         done = time.ticks_diff(self._ticks_ms(), t0)
-        if done >= time_ms:
+        if not 0 <= done < time_ms:  # done, or a servo never moved (t0 = 0)
             return target
         return start + (target - start) * done // time_ms
 
