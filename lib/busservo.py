@@ -5,9 +5,10 @@
 #
 #     0x55 0x55  Length  Cmd  Prm 1 ... Prm N        with Length = N + 2
 #
-# and 16-bit values travel low byte first. Commands are encoded into buffers
-# made in __init__; frames from the controller are read into another and
-# decoded where they lie, so no call allocates.
+# and 16-bit values travel low byte first. There is no checksum and no
+# request number. Commands are encoded into buffers made in __init__; the
+# controller's frames are read into another and decoded where they lie, so no
+# call allocates.
 import errno
 import time
 from micropython import const
@@ -24,11 +25,23 @@ ALL_GROUPS = const(0xFF)  # CMD_ACTION_GROUP_SPEED: every downloaded group
 
 _HEADER = const(0x55)
 _FRAME_MAX = const(257)  # header + the largest Length byte, 255
-_RX_SIZE = const(288)  # a whole frame, and room to read behind it
+_CHUNK = const(64)  # bytes read from the UART at a time
+_RX_SIZE = const(321)  # a partial frame (256 bytes at most), and a chunk behind it
+_BUDGET = const(1028)  # bytes one poll() reads at most, so a flood of noise cannot hold it
 _QUEUE = const(32)  # frames a blocking query may hold back for poll()
 _TIMEOUT_MS = const(100)  # battery: 10 bytes at 9600 baud take about 10 ms
 _TIMEOUT_PER_ID_MS = const(10)  # 4 more bytes on the wire and one servo to ask
-_TICKS_HALF = const(0x1FFFFFFF)  # the longest span time.ticks_diff() can tell
+_TIMEOUT_MAX_MS = const(60000)
+_WINDOW_MS = const(65536)  # longer than any request's reply may take
+_LATE_MS = const(100)  # how long after its query gave up a reply may still come
+_GAP_MS = const(20)  # a frame's bytes come closer together than this, FIFOs and all
+_TICKS = const(0x3FFFFFFF)  # wire times are ticks_us() modulo 2**30, on every port
+_AHEAD_US = const(2000000)  # more ahead than this (1920 bytes) is a wrap: idle
+_SLACK_MS = const(50)  # for a UART's transmit buffer to make room, beyond the wire time
+
+# The Length of each frame the controller sends, by its command (0: it sends
+# none): RUN 5, STOP 2, COMPLETE 5, battery 4; positions 3n + 3 (marked 3).
+_LENGTHS = b"\0\0\0\0\0\0\5\2\5\0\0\0\0\0\0\4\0\0\0\0\0\3"
 
 # Builtins are slow to look up; module globals are quick. The hot paths check
 # their arguments' types with these. (They store 16-bit values' low bytes with
@@ -38,7 +51,7 @@ _int = int
 
 
 def _check(name, value, low, high):
-    # Refuse what the wire cannot carry, naming the argument and its range.
+    # Refuse what the wire cannot carry, naming the argument, its range and what came.
     if _type(value) is not _int or not low <= value <= high:
         error = TypeError if _type(value) is not _int else ValueError
         raise error("%s must be an int in %d..%d, got %r" % (name, low, high, value))
@@ -49,26 +62,42 @@ def _count(name, items, high):
     try:
         n = len(items)
     except TypeError:
-        n = -1  # not a sequence at all
+        raise TypeError("%s must be a sequence of 1..%d items, got %r" % (name, high, items))
     if not 1 <= n <= high:
-        error = TypeError if n < 0 else ValueError
-        raise error("%s must be a sequence of 1..%d items" % (name, high))
+        raise ValueError("%s must hold 1..%d items, got %d" % (name, high, n))
     return n
 
 
 class BusServo:
-    def __init__(self, uart):
+    def __init__(self, uart, baudrate=9600):
+        _check("baudrate", baudrate, 1200, 1000000)
         self._uart = uart
         self._write = uart.write  # one lookup, not two, per command
+        self._any = uart.any
+        # The wire: a byte is 10 bits (8N1). _idle (ticks_us) is when what was
+        # written will have left it; _cut is a frame the UART took only part of.
+        self._byte_us = (10000000 + baudrate - 1) // baudrate
+        self._idle = time.ticks_us() & _TICKS
+        self._cut_at = 0  # bytes of it sent (0: nothing is cut)
         self._tx = bytearray(_FRAME_MAX)
         # move() is the call a control loop makes most: it has a frame of its
         # own, with the header, Length, command and count already in place.
         self._move = bytearray((_HEADER, _HEADER, 8, CMD_SERVO_MOVE, 1, 0, 0, 0, 0, 0))
+        # Reading: the UART's bytes go through _chunk into rx[_r:_w], where
+        # frames are decoded. (readinto() cannot start mid-buffer without a
+        # memoryview slice, which allocates.)
         self._rx = bytearray(_RX_SIZE)
-        self._r = self._w = 0  # rx[_r:_w]: read, not decoded yet
-        self._f = 0  # where in rx the frame decoded last starts
+        self._chunk = bytearray(_CHUNK)
+        self._r = self._w = 0
+        self._heard = 0  # ticks_ms of the last read that brought bytes
+        self._busy = False  # decoding: a callback that polls meanwhile gets None
         self._queue = bytearray(_QUEUE)  # commands of frames held back by queries
         self._queued = 0
+        # Requests in flight: [battery, positions], the ticks_ms until which a
+        # reply may still come, or None; and the ids of the positions asked.
+        self._due = [None, None]
+        self._asked = bytearray(85)  # count, ids
+        self.noise = 0  # bytes read that were no frame of the controller's
         self.lost = 0  # frames not held because the queue was full
         self.running = False
         self.group = None
@@ -88,13 +117,23 @@ class BusServo:
             _check("servo_id", servo_id, 0, 0xFF)
             _check("position", position, 0, 0xFFFF)
             _check("time_ms", time_ms, 0, 0xFFFF)
+        if self._cut_at:
+            self._finish()
         frame = self._move
         frame[5] = time_ms
         frame[6] = time_ms >> 8
         frame[7] = servo_id
         frame[8] = position
         frame[9] = position >> 8
-        self._write(frame)
+        took = self._write(frame)
+        if took != 10:
+            self._finish(frame, took, 10)
+        else:  # the usual case: the UART took it all. _sent(10), inline (see there)
+            servo_id = time.ticks_us()
+            position = self._idle
+            if (position - servo_id) & _TICKS >= _AHEAD_US:
+                position = servo_id
+            self._idle = (position + 10 * self._byte_us) & _TICKS
 
     def move_many(self, servos, time_ms):
         """CMD_SERVO_MOVE: move 1..83 servos, given as (id, position) pairs or a
@@ -103,13 +142,15 @@ class BusServo:
             servos = servos.items()
         n = _count("servos", servos, 83)
         _check("time_ms", time_ms, 0, 0xFFFF)
+        if self._cut_at:
+            self._finish()  # before tx, which may hold its rest, is overwritten
         tx = self._tx
         i = 7
         for pair in servos:
             try:
                 servo_id, position = pair
             except (TypeError, ValueError):
-                raise TypeError("servos must hold (servo_id, position) pairs")
+                raise TypeError("servos must hold (servo_id, position) pairs, got %r" % (pair,))
             if (
                 _type(servo_id) is not _int
                 or _type(position) is not _int
@@ -144,18 +185,37 @@ class BusServo:
         """CMD_MULT_SERVO_UNLOAD: let 1..252 servos go limp."""
         self._ids_command(CMD_MULT_SERVO_UNLOAD, ids, 252)
 
-    def request_battery(self):
-        """CMD_GET_BATTERY_VOLTAGE: ask for the voltage; the reply comes through poll()."""
+    def request_battery(self, timeout_ms=_TIMEOUT_MS):
+        """CMD_GET_BATTERY_VOLTAGE: ask for the voltage; the reply comes through
+        poll(). pending() is True until it has come, or timeout_ms after the
+        request has left the wire (and 100 ms more, for a late reply)."""
+        _check("timeout_ms", timeout_ms, 0, _TIMEOUT_MAX_MS)
         self._send(CMD_GET_BATTERY_VOLTAGE, 0)
+        self._asking(0, timeout_ms)
 
-    def request_positions(self, ids):
+    def request_positions(self, ids, timeout_ms=None):
         """CMD_MULT_SERVO_POS_READ: ask for 1..84 positions (the reply must fit
-        in a Length byte); the reply comes through poll()."""
+        in a Length byte); the reply comes through poll(), as request_battery()'s."""
+        n = _count("ids", ids, 84)
+        if timeout_ms is None:
+            timeout_ms = _TIMEOUT_MS + _TIMEOUT_PER_ID_MS * n
+        _check("timeout_ms", timeout_ms, 0, _TIMEOUT_MAX_MS)
         self._ids_command(CMD_MULT_SERVO_POS_READ, ids, 84)
+        asked = self._asked
+        for i in range(n + 1):
+            asked[i] = self._tx[4 + i]  # the count and the ids, as sent
+        self._asking(1, timeout_ms)
+
+    def _asking(self, kind, timeout_ms):
+        # A reply to the request just sent may come until timeout_ms after it
+        # has left the wire, and a late one for _LATE_MS more.
+        self._due[kind] = time.ticks_add(time.ticks_ms(), self.wire_ms() + timeout_ms + _LATE_MS)
 
     def _group_command(self, cmd, group, name, value):
         _check("group", group, 0, 0xFF)
         _check(name, value, 0, 0xFFFF)
+        if self._cut_at:
+            self._finish()
         tx = self._tx
         tx[4] = group
         tx[5] = value
@@ -164,6 +224,8 @@ class BusServo:
 
     def _ids_command(self, cmd, ids, high):
         n = _count("ids", ids, high)
+        if self._cut_at:
+            self._finish()  # before tx, which may hold its rest, is overwritten
         tx = self._tx
         i = 5
         for servo_id in ids:
@@ -174,59 +236,136 @@ class BusServo:
         tx[4] = n
         self._send(cmd, n + 1)
 
+    # The wire. A port's UART.write() takes what fits in its transmit buffer
+    # and returns that count, or None if nothing fit (rp2 with timeout=0), or
+    # waits for room (esp32). A frame leaves whole, or the call raises.
+
+    def wire_ms(self):
+        """How many ms of what was written are still ahead on the wire (0 when
+        idle). A query's timeout counts from when its request has left it."""
+        ahead = (self._idle - time.ticks_us()) & _TICKS
+        return (ahead + 999) // 1000 if ahead < _AHEAD_US else 0
+
     def _send(self, cmd, nparams):
+        if self._cut_at:
+            self._finish()
         tx = self._tx
-        tx[0] = tx[1] = _HEADER  # reads may have used tx (see _next_frame)
+        tx[0] = tx[1] = _HEADER
         tx[2] = nparams + 2
         tx[3] = cmd
-        self._write(tx, nparams + 4)  # the first n bytes, without a slice
+        n = nparams + 4
+        took = self._write(tx, n)  # the first n bytes, without a slice
+        if took == n:
+            self._sent(n)
+        else:
+            self._finish(tx, took, n)
 
-    # Blocking queries. They return as soon as the reply is complete.
+    def _sent(self, n):
+        # n more bytes are on their way: the wire is busy until they have left,
+        # behind what is on it already (or from now, if it was idle).
+        now = time.ticks_us()
+        idle = self._idle
+        if (idle - now) & _TICKS >= _AHEAD_US:
+            idle = now
+        self._idle = (idle + n * self._byte_us) & _TICKS
+
+    def _finish(self, buf=None, at=0, end=0):
+        # Write the rest of a frame the UART took only part of: buf from at to
+        # end, or with no buf, the cut one's rest, as the wire makes room for
+        # it, up to a deadline the wire time sets. Past it, raise; if part of
+        # the frame went (_cut_at > 0), the next command sends its rest first,
+        # so the controller never reads a new frame as the tail of a cut one.
+        if buf is None:
+            buf = self._cut
+            at = self._cut_at
+            end = self._cut_end
+        else:
+            at = at or 0  # write() returns None when it took nothing
+            self._sent(at)
+            self._cut = buf
+            self._cut_end = end
+        deadline = time.ticks_add(
+            time.ticks_ms(), self.wire_ms() + (end - at) * self._byte_us // 1000 + _SLACK_MS
+        )
+        while at < end:
+            self._cut_at = at
+            took = self._write(buf, at, end - at) or 0
+            if took:
+                self._sent(took)
+                at += took
+            elif time.ticks_diff(time.ticks_ms(), deadline) >= 0:
+                raise OSError(errno.EIO, "UART took %d of %d bytes" % (at, end))
+            else:
+                time.sleep_us(self._byte_us)  # room comes a byte at a time
+        self._cut_at = 0
+
+    # Queries. The protocol numbers no requests, so a reply is known to answer
+    # ours only if nothing else of its kind can be on its way: a query first
+    # lets an earlier request's reply come (poll() gets it) or its time run out.
 
     def read_battery(self, timeout_ms=_TIMEOUT_MS):
-        """Battery voltage in mV. Raises OSError(ETIMEDOUT) if no reply comes."""
+        """Battery voltage in mV. Raises OSError(ETIMEDOUT) if no reply comes
+        within timeout_ms of the request leaving the wire."""
         self._query(CMD_GET_BATTERY_VOLTAGE, None, timeout_ms)
         return self.battery
 
     def read_positions(self, ids, timeout_ms=None):
-        """{servo_id: position} for 1..84 servos. Raises OSError(ETIMEDOUT) if no
-        reply comes; the default timeout is 100 ms plus 10 ms per servo."""
-        if timeout_ms is None:
-            timeout_ms = _TIMEOUT_MS + _TIMEOUT_PER_ID_MS * _count("ids", ids, 84)
+        """{servo_id: position} for 1..84 servos; positions are signed (a servo
+        near 0 may say -3). Raises OSError(ETIMEDOUT) if no reply comes; the
+        default timeout is 100 ms plus 10 ms per servo. Only a reply that
+        carries exactly these ids, in this order, answers it."""
         self._query(CMD_MULT_SERVO_POS_READ, ids, timeout_ms)
-        rx = self._rx
         got = {}
-        for i in range(self._f + 5, self._f + 5 + 3 * rx[self._f + 4], 3):
-            got[rx[i]] = rx[i + 1] | rx[i + 2] << 8
+        for servo_id in ids:
+            got[servo_id] = self.positions[servo_id]
         return got
 
+    def pending(self, cmd):
+        """True while the reply to the last request of this kind
+        (CMD_GET_BATTERY_VOLTAGE or CMD_MULT_SERVO_POS_READ) may still come."""
+        kind = cmd == CMD_MULT_SERVO_POS_READ
+        if not kind and cmd != CMD_GET_BATTERY_VOLTAGE:
+            raise ValueError("cmd must be a query's, got %r" % cmd)
+        due = self._due[kind]
+        if due is not None and not 0 < time.ticks_diff(due, time.ticks_ms()) < _WINDOW_MS:
+            due = self._due[kind] = None  # its time has run out
+        return due is not None
+
     def _query(self, cmd, ids, timeout_ms):
-        _check("timeout_ms", timeout_ms, 0, _TICKS_HALF)
-        start = None  # not asked yet: what comes now answers no request of ours
+        kind = cmd == CMD_MULT_SERVO_POS_READ
+        deadline = None  # not asked yet
+        late = 0  # frames decoded since the deadline: one last look, then give up
         while True:
+            if deadline is not None and (late or time.ticks_diff(time.ticks_ms(), deadline) >= 0):
+                late += 1
             got = self._next_frame()
-            if got is None:
-                if start is None:  # all that had come is read: ask now
-                    if ids is None:
-                        self._send(cmd, 0)
+            if deadline is None:
+                # Decode what has come first (none of it answers this query), and
+                # let an earlier request's reply come or its time run out. Then ask.
+                if got is None and not self.pending(cmd):
+                    if kind:
+                        self.request_positions(ids, timeout_ms)  # checks the arguments
                     else:
-                        self._ids_command(cmd, ids, 84)
-                    start = time.ticks_ms()
-                elif time.ticks_diff(time.ticks_ms(), start) >= timeout_ms:
-                    raise OSError(errno.ETIMEDOUT)
-            elif got == cmd and start is not None:
-                return
-            elif self._queued < _QUEUE:  # hold it for poll(); its state is applied
-                self._queue[self._queued] = got
-                self._queued += 1
-            else:
-                self.lost += 1
+                        self.request_battery(timeout_ms)
+                    deadline = time.ticks_add(self._due[kind], -_LATE_MS)
+            elif got == cmd and self._due[kind] is None:
+                return  # the reply: it matched the request
+            elif got is None and late or late > _QUEUE:
+                raise OSError(errno.ETIMEDOUT)
+            if got is not None:  # hold it for poll(); its state is applied
+                if self._queued < _QUEUE:
+                    self._queue[self._queued] = got
+                    self._queued += 1
+                else:
+                    self.lost += 1
 
     # Frames from the controller.
 
     def poll(self):
         """Return the command byte of the oldest frame not returned yet, after
         applying it to the state, or None. Never blocks; one frame per call."""
+        if not self._queued and self._r == self._w and not self._any():
+            return None  # the usual case in a control loop: one uart.any()
         if self._queued:  # frames a query held back come first
             queue = self._queue
             cmd = queue[0]
@@ -239,80 +378,100 @@ class BusServo:
     def _next_frame(self):
         # Find the next whole frame in rx[_r:_w], reading what the UART holds
         # as needed; apply it to the state and return its command. None once
-        # the UART holds nothing more and no whole frame is in rx.
-        rx = self._rx
-        r = self._r
-        w = self._w
-        while True:
-            # No checksum exists, so check what structure there is: the header
-            # is the last two 0x55 of a run (no frame has Length 0x55), and a
-            # frame the controller sends must have its command's Length. One
-            # that fails is not trusted: drop a byte and look again, so it
-            # cannot swallow the good frames behind it.
-            while w - r >= 4:  # the smallest frame: 55 55 02 07
-                if rx[r] != _HEADER or rx[r + 1] != _HEADER or rx[r + 2] == _HEADER:
+        # the UART holds nothing more and no whole frame is in rx. _r and _w
+        # are stored before every call to the UART, so an exception from it
+        # loses no byte and leaves nothing half done.
+        if self._busy:
+            return None  # a callback polled while we decode: the first call goes on
+        self._busy = True
+        try:
+            rx = self._rx
+            budget = _BUDGET
+            while True:
+                r = self._r
+                w = self._w
+                # Only the frames the controller sends, with their lengths, are
+                # frames. Anything else is noise: drop a byte and look again, so
+                # that noise cannot swallow the good frames behind it.
+                while r < w:
+                    have = w - r
+                    ok = rx[r] == _HEADER and (have < 2 or rx[r + 1] == _HEADER)
+                    if ok and have > 3:
+                        length = rx[r + 2]
+                        cmd = rx[r + 3]
+                        ok = _LENGTHS[cmd] if cmd < 22 else 0
+                        if ok == 3:  # positions: Length 3n + 3, for n >= 1 servos
+                            ok = length > 5 and length % 3 == 0
+                            ok = ok and (have < 5 or rx[r + 4] == length // 3 - 1)
+                        else:
+                            ok = ok and length == ok
+                        if ok and have >= length + 2:
+                            self._r = r + length + 2
+                            self._apply(cmd, r)
+                            return cmd
+                    if ok:
+                        break  # a frame's start: the rest is on its way
                     r += 1
-                    continue
-                length = rx[r + 2]
-                cmd = rx[r + 3]
-                if cmd == CMD_ACTION_GROUP_RUN or cmd == CMD_ACTION_GROUP_COMPLETE:
-                    ok = length == 5
-                elif cmd == CMD_ACTION_GROUP_STOP:
-                    ok = length == 2
-                elif cmd == CMD_GET_BATTERY_VOLTAGE:
-                    ok = length == 4
-                elif cmd == CMD_MULT_SERVO_POS_READ:
-                    if w - r < 5:
-                        break
-                    ok = length == 3 * rx[r + 4] + 3
-                else:  # a command the controller does not send: skip it whole
-                    ok = length >= 2
-                if not ok:
-                    r += 1
-                    continue
-                if r + length + 2 > w:
-                    break  # the rest is still on its way
-                self._f = r
-                self._r = r + length + 2
-                self._w = w
-                # Apply it. Parameter k is at rx[r + 3 + k].
-                if cmd == CMD_ACTION_GROUP_RUN or cmd == CMD_ACTION_GROUP_COMPLETE:
-                    self.running = cmd == CMD_ACTION_GROUP_RUN
-                    self.group = rx[r + 4]
-                    self.times = rx[r + 5] | rx[r + 6] << 8
-                elif cmd == CMD_ACTION_GROUP_STOP:
-                    self.running = False
-                elif cmd == CMD_GET_BATTERY_VOLTAGE:
-                    self.battery = rx[r + 4] | rx[r + 5] << 8
-                elif cmd == CMD_MULT_SERVO_POS_READ:
-                    positions = self.positions
-                    for i in range(r + 5, r + 5 + 3 * rx[r + 4], 3):
-                        positions[rx[i]] = rx[i + 1] | rx[i + 2] << 8
-                return cmd
-            # No whole frame here: read more, if the UART holds any.
-            uart = self._uart
-            n = uart.any()
-            if n:
-                if r == w:  # all decoded: read straight into rx
-                    r = 0
-                    n = w = uart.readinto(rx, n if n < _RX_SIZE else _RX_SIZE) or 0
-                else:
-                    # readinto() cannot start mid-buffer without a memoryview
-                    # slice, which allocates, so these bytes pass through tx,
-                    # idle while we read. Slide the partial frame down first if
-                    # little room is left behind it (it is 256 bytes at most).
-                    if _RX_SIZE - w < 32:
+                    self.noise += 1
+                self._r = r
+                # No whole frame here: read more, if the UART holds any.
+                n = self._any() if budget > 0 else 0
+                if n:
+                    if r == w:  # all decoded: start again at the front
+                        self._r = self._w = r = w = 0
+                    elif w > _RX_SIZE - _CHUNK:  # slide the partial frame down
                         for i in range(w - r):
                             rx[i] = rx[r + i]
-                        w -= r
-                        r = 0
-                    room = _RX_SIZE - w
-                    tx = self._tx
-                    n = uart.readinto(tx, n if n < room else room) or 0
+                        self._w = w = w - r
+                        self._r = 0
+                    chunk = self._chunk
+                    n = self._uart.readinto(chunk, n if n < _CHUNK else _CHUNK) or 0
                     for i in range(n):
-                        rx[w + i] = tx[i]
-                    w += n
-            if not n:
-                self._r = r
-                self._w = w
-                return None
+                        rx[w + i] = chunk[i]
+                    if not n:
+                        return None  # any() promised more than readinto() gave
+                    self._w = w + n
+                    budget -= n
+                    self._heard = time.ticks_ms()
+                elif r < w:
+                    # A frame's start, and nothing more has come. Once the line
+                    # has been quiet for longer than its missing bytes take (a
+                    # UART's FIFO may hold them back) and _GAP_MS more, the frame
+                    # was cut short: its start was noise.
+                    have = w - r
+                    missing = rx[r + 2] + 2 - have if have > 2 else _FRAME_MAX
+                    quiet = time.ticks_diff(time.ticks_ms(), self._heard)
+                    if quiet < _GAP_MS + missing * self._byte_us // 1000:
+                        return None
+                    self._r = r + 1
+                    self.noise += 1
+                else:
+                    return None
+        finally:
+            self._busy = False
+
+    def _apply(self, cmd, f):
+        # Apply the frame at rx[f] to the state. Parameter k is at rx[f + 3 + k].
+        rx = self._rx
+        if cmd == CMD_ACTION_GROUP_RUN or cmd == CMD_ACTION_GROUP_COMPLETE:
+            self.running = cmd == CMD_ACTION_GROUP_RUN
+            self.group = rx[f + 4]
+            self.times = rx[f + 5] | rx[f + 6] << 8
+        elif cmd == CMD_ACTION_GROUP_STOP:
+            self.running = False
+        elif cmd == CMD_GET_BATTERY_VOLTAGE:
+            self.battery = rx[f + 4] | rx[f + 5] << 8
+            self._due[0] = None  # it answers the request in flight, if any
+        else:  # positions: they answer the request in flight if they have its ids, in order
+            asked = self._asked
+            answers = self._due[1] is not None and asked[0] == rx[f + 4]
+            k = 1
+            for i in range(f + 5, f + 5 + 3 * rx[f + 4], 3):
+                position = rx[i + 1] | rx[i + 2] << 8
+                if position > 0x7FFF:  # signed: a servo near 0 may say -3
+                    position -= 0x10000
+                self.positions[rx[i]] = position
+                answers = answers and asked[k] == rx[i]
+                k += 1
+            if answers:
+                self._due[1] = None

@@ -1,0 +1,253 @@
+# The driver in a world as faithful as the wire (tests/wire.py): a UART with the
+# semantics of a port's machine.UART, bytes that take 10 bits of 9600 baud each,
+# the simulated controller at the far end, and faults injected on the way. Each
+# scenario runs on every port model. One test a finding of the reliability issue.
+import errno
+import time
+import unittest
+
+import busservo
+import wire
+from busservo import (
+    CMD_ACTION_GROUP_RUN,
+    CMD_ACTION_GROUP_STOP,
+    CMD_GET_BATTERY_VOLTAGE,
+    CMD_MULT_SERVO_POS_READ,
+)
+
+BATTERY_7500 = bytes((0x55, 0x55, 0x04, 0x0F, 0x4C, 0x1D))
+STOP = bytes((0x55, 0x55, 0x02, 0x07))
+
+
+def ports():
+    """(port, world, bus) for each port model, the driver on the world's clock."""
+    for port in wire.PORTS:
+        w = wire.World(port)
+        busservo.time = w.clock
+        yield port, w, busservo.BusServo(w.uart)
+
+
+def timed_out(call):
+    try:
+        call()
+    except OSError as e:
+        return e.args[0] == errno.ETIMEDOUT
+    return False
+
+
+def settle(w, bus, ms=200):
+    """Let ms of simulated time pass with a control loop polling every ms;
+    return the commands of the frames that came."""
+    got = []
+    for _ in range(ms):
+        w.clock.advance_ms(1)
+        while True:
+            cmd = bus.poll()
+            if cmd is None:
+                break
+            got.append(cmd)
+    return got
+
+
+def moves(frames):
+    return [f for f in frames if f[3] == busservo.CMD_SERVO_MOVE]
+
+
+class Wire(unittest.TestCase):
+    def tearDown(self):
+        busservo.time = time
+
+    # 1. Cut frames: write() may take part of a frame, or none of it.
+
+    def test_back_to_back_moves_all_reach_the_controller_whole(self):
+        for port, w, bus in ports():
+            for i in range(300):
+                bus.move(1 + i % 6, 100 + i, 200)
+            settle(w, bus, 1000)
+            self.assertEqual(len(moves(w.frames())), 300, port)
+            self.assertEqual((w.garbled, w.sim.beeps), (0, 0), port)
+            self.assertEqual(w.sim.position(6), 100 + 299, port)
+
+    def test_back_to_back_18_servo_moves_all_reach_the_controller_whole(self):
+        for port, w, bus in ports():
+            for i in range(20):
+                bus.move_many([(s, 100 + 10 * i + s) for s in range(1, 19)], 100)
+            settle(w, bus, 1200)
+            self.assertEqual(len(moves(w.frames())), 20, port)
+            self.assertEqual((w.garbled, w.sim.beeps), (0, 0), port)
+            self.assertEqual(w.sim.position(18), 100 + 190 + 18, port)
+
+    def test_a_uart_that_stops_taking_bytes_raises_and_the_frame_is_finished_later(self):
+        for port, w, bus in ports():
+            bus.move_many([(s, 600) for s in range(1, 31)], 100)  # 97 bytes, 101 ms of wire
+            w.uart.stall(True)
+            try:
+                for _ in range(40):  # fills the transmit buffer, then cannot go on
+                    bus.move_many([(s, 600) for s in range(1, 31)], 100)
+                error = None
+            except OSError as e:
+                error = e.args[0]
+            self.assertEqual(error, errno.EIO, port)  # not ETIMEDOUT: that means "no reply"
+            w.uart.stall(False)
+            bus.move(1, 900, 0)  # sends the cut frame's rest first, then itself
+            settle(w, bus, 2000)
+            self.assertEqual(w.garbled, 0, port)
+            self.assertEqual(w.sim.beeps, 0, port)
+            self.assertEqual(w.sim.position(1), 900, port)
+
+    # 2. Noise must not swallow the good frames behind it.
+
+    def test_three_bytes_of_noise_before_a_reply_lose_nothing(self):
+        for port, w, bus in ports():
+            for length in (3, 5, 21, 60, 255):
+                w.noise(bytes((0x55, 0x55, length)))
+                self.assertEqual(bus.read_battery(), 7500, "%s, Length %d" % (port, length))
+            self.assertEqual(bus.noise, 15, port)
+
+    def test_a_power_on_glitch_is_forgotten_at_once(self):
+        for port, w, bus in ports():
+            w.noise(b"\x55\x55\xff\x63")
+            self.assertEqual(bus.read_battery(), 7500, port)
+
+    def test_a_frame_cut_short_holds_nothing_hostage(self):
+        for port, w, bus in ports():
+            w.cut_reply(4)  # the battery reply stops after 55 55 04 0F
+            self.assertTrue(timed_out(bus.read_battery), port)
+            bus.run_group(1)  # the RUN that comes back is decoded, however quiet the line
+            self.assertEqual(settle(w, bus, 100), [CMD_ACTION_GROUP_RUN], port)
+            self.assertEqual(bus.noise, 4, port)
+
+    # 3. A reply answers only the question it matches.
+
+    def test_a_late_reply_is_not_the_answer_to_the_next_query(self):
+        for port, w, bus in ports():
+            w.late(150)
+            self.assertTrue(timed_out(bus.read_battery), port)
+            w.sim.battery = 7100
+            self.assertEqual(bus.read_battery(), 7100, port)
+            self.assertIn(CMD_GET_BATTERY_VOLTAGE, settle(w, bus, 10), port)
+
+    def test_a_late_position_reply_is_not_the_answer_to_other_ids(self):
+        for port, w, bus in ports():
+            w.sim.write(b"\x55\x55\x0b\x03\x02\x00\x00\x01\x6f\x00\x02\xde\x00")  # 1: 111, 2: 222
+            w.late(150)
+            self.assertTrue(timed_out(lambda b=bus: b.read_positions([1, 2])), port)
+            self.assertEqual(bus.read_positions([3]), {3: 500}, port)
+            self.assertEqual(bus.positions[1], 111, port)  # the late reply, as an event
+
+    def test_a_position_reply_with_other_ids_is_an_event(self):
+        for port, w, bus in ports():
+            w.noise(b"\x55\x55\x06\x15\x01\x07\xf4\x01")  # servo 7, unasked
+            self.assertEqual(bus.read_positions([3], timeout_ms=200), {3: 500}, port)
+            self.assertEqual(bus.poll(), CMD_MULT_SERVO_POS_READ, port)
+            self.assertEqual(bus.positions[7], 500, port)
+
+    # 4. A query's timeout counts from when its request has left the wire.
+
+    def test_a_query_behind_a_long_move_waits_for_the_wire(self):
+        for port, w, bus in ports():
+            bus.move_many([(s, 500) for s in range(1, 41)], 100)  # 127 bytes, 132 ms of wire
+            self.assertEqual(bus.read_battery(), 7500, port)
+            bus.move_many([(s, 500) for s in range(1, 41)], 100)
+            self.assertTrue(bus.wire_ms() > 100, port)
+            w.clock.advance_ms(140)
+            self.assertEqual(bus.wire_ms(), 0, port)
+
+    def test_wire_ms_counts_10_bits_a_byte(self):
+        for port, w, bus in ports():
+            self.assertEqual(bus.wire_ms(), 0, port)
+            bus.move(1, 500, 0)
+            self.assertIn(bus.wire_ms(), (10, 11), port)
+            w.clock.advance_ms(11)
+            self.assertEqual(bus.wire_ms(), 0, port)
+
+    # 5. An exception from the UART loses nothing and leaves nothing half done.
+
+    def test_an_exception_from_the_uart_loses_no_byte(self):
+        # A 185-byte reply, read in parts; the UART raises (an unplugged
+        # adapter's EIO, a Ctrl-C) at each point of the reading in turn.
+        ids = range(1, 61)
+        for method in ("any", "readinto"):
+            for skip in range(3):
+                for port, w, bus in ports():
+                    why = "%s, %s, call %d" % (port, method, skip + 1)
+                    bus.request_positions(ids)
+                    w.clock.advance_ms(200)  # the reply is partway here
+                    self.assertIsNone(bus.poll(), why)  # its first part is read
+                    w.uart.fail(method, KeyboardInterrupt(), skip)
+                    with self.assertRaises(KeyboardInterrupt):
+                        settle(w, bus, 100)
+                    self.assertEqual(settle(w, bus, 100), [CMD_MULT_SERVO_POS_READ], why)
+                    self.assertEqual(bus.positions, {i: 500 for i in ids}, why)
+                    self.assertEqual(getattr(bus, "noise", 0), 0, why)
+
+    def test_a_command_from_a_callback_in_the_middle_of_poll(self):
+        ids = range(1, 61)
+        for port, w, bus in ports():
+            bus.request_positions(ids)
+            w.clock.advance_ms(200)
+            self.assertIsNone(bus.poll())  # the first part of the reply is read
+            # The next read brings more of it, and a timer callback sends a command.
+            w.uart.during("readinto", lambda b=bus: b.set_group_speed(1, 150), "after")
+            self.assertEqual(settle(w, bus, 100), [CMD_MULT_SERVO_POS_READ], port)
+            self.assertEqual(bus.positions, {i: 500 for i in ids}, port)
+            self.assertEqual(getattr(bus, "noise", 0), 0, port)
+            self.assertEqual(w.sim.speed(1), 150, port)
+
+    def test_a_poll_from_a_callback_in_the_middle_of_poll(self):
+        got = []
+
+        def callback():
+            got.append(bus.poll())
+
+        for port, w, bus in ports():
+            got.clear()
+            bus.request_battery()
+            w.clock.advance_ms(20)
+            w.uart.during("readinto", callback, when="after")
+            self.assertEqual(settle(w, bus, 10), [CMD_GET_BATTERY_VOLTAGE], port)
+            self.assertEqual(got, [None], port)
+
+    # 7. The smaller ones.
+
+    def test_readinto_is_never_asked_for_more_than_its_buffer(self):
+        from fakeuart import FakeUART
+
+        class Strict(FakeUART):
+            def readinto(self, buf, nbytes=None):
+                assert nbytes is None or nbytes <= len(buf), (nbytes, len(buf))
+                return FakeUART.readinto(self, buf, nbytes)
+
+        uart = Strict()
+        bus = busservo.BusServo(uart)
+        uart.feed(b"\x55\x55")  # a frame's start, then a long run of noise
+        self.assertIsNone(bus.poll())
+        uart.feed(bytes(600) + STOP)
+        while uart.any():
+            bus.poll()
+        self.assertEqual(bus.noise, 602)
+
+    def test_positions_are_signed(self):
+        for port, w, bus in ports():
+            w.noise(b"\x55\x55\x09\x15\x02\x01\xfd\xff\x02\x00\x00")
+            settle(w, bus, 20)
+            self.assertEqual((bus.positions[1], bus.positions[2]), (-3, 0), port)
+
+    def test_a_reply_that_comes_just_before_the_deadline_is_taken(self):
+        for port, w, bus in ports():
+            w.late(20)  # the round trip is about 10.4 ms: 30.4 ms, 26.2 after the request
+            self.assertEqual(bus.read_battery(timeout_ms=27), 7500, port)
+
+    def test_a_query_times_out_under_a_stream_of_other_frames(self):
+        for port, w, bus in ports():
+            w.sim.silent = True
+            for _ in range(200):
+                w.noise(STOP)  # a STOP every 4.2 ms, for 840 ms
+            start = w.clock.now_us
+            self.assertTrue(timed_out(bus.read_battery), port)
+            self.assertTrue(w.clock.now_us - start < 150000, port)
+            self.assertIn(CMD_ACTION_GROUP_STOP, settle(w, bus, 20), port)
+
+
+if __name__ == "__main__":
+    unittest.main()
