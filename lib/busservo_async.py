@@ -20,9 +20,12 @@
 # Queries are serialised: one request is on the bus at a time, and a second
 # task's query waits for the first one's reply (or timeout) before it asks.
 # The protocol numbers no requests, so this is how a reply is known to be the
-# answer to the request just made. A timeout raises OSError(ETIMEDOUT), as the
-# blocking API does. Use this object's poll() and events(), not the BusServo's
-# poll() or blocking queries, so that no frame goes past the waiting tasks.
+# answer to the request just made; the driver checks that it matches (a
+# position reply must carry the ids asked) and, after a query timed out or was
+# cancelled, lets its late reply come (as an event) before the next one asks.
+# A timeout raises OSError(ETIMEDOUT), as the blocking API does. Use this
+# object's poll() and events(), not the BusServo's poll() or blocking queries,
+# so that no frame goes past the waiting tasks.
 import asyncio
 import errno
 import time
@@ -30,10 +33,21 @@ import time
 import busservo
 from busservo import (
     CMD_ACTION_GROUP_COMPLETE,
+    CMD_ACTION_GROUP_RUN,
     CMD_ACTION_GROUP_STOP,
     CMD_GET_BATTERY_VOLTAGE,
     CMD_MULT_SERVO_POS_READ,
 )
+
+
+def _check_timeout(timeout_ms, none_ok=False):
+    # As the driver checks it, before anything is written.
+    if timeout_ms is None and none_ok:
+        return
+    if type(timeout_ms) is not int:
+        raise TypeError("timeout_ms must be an int in 0..60000, got %r" % (timeout_ms,))
+    if not 0 <= timeout_ms <= 60000:
+        raise ValueError("timeout_ms must be an int in 0..60000, got %r" % (timeout_ms,))
 
 
 class AsyncBusServo:
@@ -45,48 +59,70 @@ class AsyncBusServo:
         self.lost = 0  # frames not held because `queue` were waiting already
         self._queue = queue
         self._held = []  # commands for events() and poll(), oldest first
-        self._waiters = []  # [commands wanted, takes the frame?, what came]
-        self._ended = None  # how the last group ended, since the last run_group()
+        self._waiters = []  # [commands wanted, a query's?, what came]
+        # The group run_group() started: None (none), False (asked, its RUN not
+        # seen yet: an end that comes now is an earlier group's), True (running),
+        # or how it ended.
+        self._run = None
+        self._group = None  # the group run_group() started
         self._asking = asyncio.Lock()  # one query on the bus at a time
 
     def __getattr__(self, name):
         # The commands (they only write, so they never block) and the state
-        # (running, group, times, battery, positions) are the BusServo's.
+        # (running, group, times, battery, positions, noise, wire_ms()) are the
+        # BusServo's.
         return getattr(self.bus, name)
 
     # Queries.
 
     async def read_battery(self, timeout_ms=100):
         """Battery voltage in mV."""
+        _check_timeout(timeout_ms)
         async with self._asking:
-            self._dispatch()  # what came before answers no request of ours
-            self.bus.request_battery()
-            await self._wait((CMD_GET_BATTERY_VOLTAGE,), True, timeout_ms)
+            await self._ask(CMD_GET_BATTERY_VOLTAGE, None, timeout_ms)
             return self.bus.battery
 
     async def read_positions(self, ids, timeout_ms=None):
         """{servo_id: position} for 1..84 servos; the default timeout is 100 ms
         plus 10 ms per servo."""
+        _check_timeout(timeout_ms, True)
         async with self._asking:
+            await self._ask(CMD_MULT_SERVO_POS_READ, ids, timeout_ms)
+            positions = self.bus.positions
+            return {servo_id: positions[servo_id] for servo_id in ids}
+
+    async def _ask(self, cmd, ids, timeout_ms):
+        bus = self.bus
+        while bus.pending(cmd):  # an earlier request's reply may still come
             self._dispatch()
-            self.bus.request_positions(ids)  # checks ids
+            await asyncio.sleep_ms(self.poll_ms)
+        self._dispatch()  # what came before answers no request of ours
+        if ids is None:
+            bus.request_battery(timeout_ms)
+        else:
+            bus.request_positions(ids, timeout_ms)  # checks ids
             if timeout_ms is None:
                 timeout_ms = 100 + 10 * len(ids)
-            return await self._wait((CMD_MULT_SERVO_POS_READ,), True, timeout_ms)
+        # The timeout counts from when the request has left the wire.
+        await self._wait((cmd,), True, bus.wire_ms() + timeout_ms)
 
     def run_group(self, group, times=1):
         """As BusServo.run_group()."""
         self.bus.run_group(group, times)
-        self._ended = None  # this one has not ended yet
+        self._run = False  # an end before its RUN comes back is an earlier group's
+        self._group = group
 
     async def wait_group_done(self, timeout_ms=None):
-        """Wait for the running action group (or the one just started) to end:
-        CMD_ACTION_GROUP_COMPLETE if it ran its course, CMD_ACTION_GROUP_STOP if
-        it was stopped. timeout_ms=None waits as long as it takes. If it ended
-        already (while another task awaited, say), this returns at once."""
+        """Wait for the action group the last run_group() started to end (or,
+        with none started, the running one): CMD_ACTION_GROUP_COMPLETE if it ran
+        its course, CMD_ACTION_GROUP_STOP if it was stopped. timeout_ms=None
+        waits as long as it takes. If it ended already (while another task
+        awaited, say), this returns at once."""
+        if timeout_ms is not None and (type(timeout_ms) is not int or timeout_ms < 0):
+            _check_timeout(-1 if type(timeout_ms) is int else timeout_ms)
         self._dispatch()
-        if self._ended is not None and not self.bus.running:
-            return self._ended
+        if self._run is not None and self._run is not False and self._run is not True:
+            return self._run
         wanted = (CMD_ACTION_GROUP_COMPLETE, CMD_ACTION_GROUP_STOP)
         return await self._wait(wanted, False, timeout_ms)
 
@@ -111,10 +147,8 @@ class AsyncBusServo:
                 return cmd
             await asyncio.sleep_ms(self.poll_ms)
 
-    async def _wait(self, wanted, takes, timeout_ms):
-        if timeout_ms is not None:
-            busservo._check("timeout_ms", timeout_ms, 0, 0x1FFFFFFF)
-        waiter = [wanted, takes, None]
+    async def _wait(self, wanted, query, timeout_ms):
+        waiter = [wanted, query, None]
         self._waiters.append(waiter)
         start = time.ticks_ms()
         try:
@@ -138,25 +172,21 @@ class AsyncBusServo:
             cmd = bus.poll()
             if cmd is None:
                 return
-            if cmd == CMD_ACTION_GROUP_COMPLETE or cmd == CMD_ACTION_GROUP_STOP:
-                self._ended = cmd
+            end = cmd == CMD_ACTION_GROUP_COMPLETE or cmd == CMD_ACTION_GROUP_STOP
+            if cmd == CMD_ACTION_GROUP_RUN and self._run is False and bus.group == self._group:
+                self._run = True  # the group run_group() started has started
+            elif end and self._run is True:
+                self._run = cmd
             for waiter in self._waiters:
                 if waiter[2] is None and cmd in waiter[0]:
-                    waiter[2] = cmd
-                    if waiter[1]:  # a query's reply: the query takes it
-                        if cmd == CMD_MULT_SERVO_POS_READ:
-                            waiter[2] = self._reply_positions()
-                        break
+                    if waiter[1]:  # a query takes its reply, and only its reply
+                        if not bus.pending(cmd):
+                            waiter[2] = cmd
+                            break
+                    elif self._run is not False:  # not an earlier group's end
+                        waiter[2] = cmd
             else:  # nobody took it: hold it for events() and poll()
                 if len(self._held) < self._queue:
                     self._held.append(cmd)
                 else:
                     self.lost += 1
-
-    def _reply_positions(self):
-        # The reply just decoded still lies in the driver's receive buffer. (The
-        # twin of the loop in BusServo.read_positions(): a shared method there
-        # would take busservo.py's RAM past its 8 KB target.)
-        rx = self.bus._rx
-        f = self.bus._f
-        return {rx[i]: rx[i + 1] | rx[i + 2] << 8 for i in range(f + 5, f + 5 + 3 * rx[f + 4], 3)}

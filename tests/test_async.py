@@ -13,7 +13,15 @@ from busservo import (
 )
 from busservo_async import AsyncBusServo
 from fakeuart import FakeUART
-from test_frames import ALL_500, BATTERY_7500, COMPLETE_8_ONCE, POSITIONS_ALL_500, RUN_8_ONCE, STOP
+from test_frames import (
+    ALL_500,
+    BATTERY_7500,
+    COMPLETE_8_ONCE,
+    POSITIONS_ALL_500,
+    RUN_2_FOREVER,
+    RUN_8_ONCE,
+    STOP,
+)
 from test_queries import BATTERY_7400, GET_BATTERY, READ_1_TO_6
 
 
@@ -113,7 +121,7 @@ class Async(unittest.TestCase):
             self.bus.run_group(8)
             done = await self.bus.wait_group_done(timeout_ms=2000)
             self.bus.run_group(2, 0)
-            self.uart.feed_later(RUN_8_ONCE, 5)
+            self.uart.feed_later(RUN_2_FOREVER, 5)
             self.uart.feed_later(STOP, 20)
             stopped = await self.bus.wait_group_done(timeout_ms=2000)
             self.bus.run_group(3)

@@ -2,13 +2,16 @@
 # semantics of a port's machine.UART, bytes that take 10 bits of 9600 baud each,
 # the simulated controller at the far end, and faults injected on the way. Each
 # scenario runs on every port model. One test a finding of the reliability issue.
+import asyncio
 import errno
 import time
 import unittest
 
 import busservo
+import busservo_async
 import wire
 from busservo import (
+    CMD_ACTION_GROUP_COMPLETE,
     CMD_ACTION_GROUP_RUN,
     CMD_ACTION_GROUP_STOP,
     CMD_GET_BATTERY_VOLTAGE,
@@ -251,3 +254,77 @@ class Wire(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+class SimAsyncio:
+    """asyncio for busservo_async in the world: sleeping advances the world's
+    clock, then lets the other tasks run."""
+
+    def __init__(self, clock):
+        self.clock = clock
+        self.Lock = asyncio.Lock
+
+    async def sleep_ms(self, ms):
+        self.clock.advance_ms(ms)
+        await asyncio.sleep_ms(0)
+
+
+def async_ports():
+    """(port, world, AsyncBusServo) for each port model, on the world's clock."""
+    for port, w, bus in ports():
+        busservo_async.time = w.clock
+        busservo_async.asyncio = SimAsyncio(w.clock)
+        yield port, w, busservo_async.AsyncBusServo(bus, poll_ms=1)
+
+
+class Async(unittest.TestCase):
+    def tearDown(self):
+        busservo.time = busservo_async.time = time
+        busservo_async.asyncio = asyncio
+
+    def test_a_cancelled_query_leaves_its_reply_to_events(self):
+        async def main(w, bus):
+            w.late(150)
+            task = asyncio.create_task(bus.read_battery())
+            await busservo_async.asyncio.sleep_ms(50)
+            task.cancel()
+            w.sim.battery = 7100
+            return await bus.read_battery()
+
+        for port, w, bus in async_ports():
+            self.assertEqual(asyncio.run(main(w, bus)), 7100, port)
+            self.assertEqual(bus.poll(), CMD_GET_BATTERY_VOLTAGE, port)  # the late one
+
+    def test_wait_group_done_waits_for_the_group_run_group_started(self):
+        async def main(w, bus):
+            bus.run_group(1)  # 500 ms
+            await busservo_async.asyncio.sleep_ms(495)  # its COMPLETE is on its way
+            bus.run_group(2)  # 2000 ms
+            start = w.clock.now_us
+            how = await bus.wait_group_done()
+            return how, bus.group, w.clock.now_us - start
+
+        for port, w, bus in async_ports():
+            how, group, took = asyncio.run(main(w, bus))
+            self.assertEqual((how, group), (CMD_ACTION_GROUP_COMPLETE, 2), port)
+            self.assertTrue(1990000 < took < 2100000, (port, took))
+
+    def test_wait_group_done_after_a_run_that_stops_the_running_group(self):
+        async def main(w, bus):
+            bus.run_group(2, 0)  # forever
+            await busservo_async.asyncio.sleep_ms(100)
+            bus.run_group(1)  # the controller stops group 2 (STOP), then runs 1
+            return await bus.wait_group_done(), bus.group
+
+        for port, w, bus in async_ports():
+            self.assertEqual(asyncio.run(main(w, bus)), (CMD_ACTION_GROUP_COMPLETE, 1), port)
+
+    def test_a_bad_timeout_writes_nothing(self):
+        for port, w, bus in async_ports():
+            for bad in (-1, 60001, 1.5, "100"):
+                with self.assertRaises((ValueError, TypeError)):
+                    asyncio.run(bus.read_battery(timeout_ms=bad))
+                with self.assertRaises((ValueError, TypeError)):
+                    asyncio.run(bus.read_positions([1], timeout_ms=bad))
+            w.clock.advance_ms(20)
+            self.assertEqual(w.received(), b"", port)
