@@ -84,10 +84,11 @@ class SimController:
         return len(self._out)
 
     def readinto(self, buf, nbytes=None):
-        n = min(self.any(), len(buf) if nbytes is None else nbytes)
+        n = min(self.any(), len(buf) if nbytes is None else min(nbytes, len(buf)))
         if not n:
             return None
-        buf[:n] = self._out[:n]
+        for i in range(n):
+            buf[i] = self._out[i]
         self._out = self._out[n:]
         return n
 
@@ -99,9 +100,13 @@ class SimController:
         self._out = self._out[n:]
         return data
 
-    def write(self, buf, nbytes=None):
-        n = len(buf) if nbytes is None else nbytes
-        self._in += buf[:n]
+    def write(self, buf, off=None, nbytes=None):
+        # The stream protocol's forms: write(buf), write(buf, n), write(buf, off, n).
+        if nbytes is None:
+            off, nbytes = 0, len(buf) if off is None else off
+        off = min(off, len(buf))
+        n = min(nbytes, len(buf) - off)
+        self._in += buf[off : off + n]
         self._tick()
         self._decode()
         return n
@@ -140,8 +145,9 @@ class SimController:
                 continue
             if len(d) - i < length + 2:
                 break
-            self._do(cmd, bytes(d[i + 4 : i + length + 2]))
             i += length + 2
+            self._in = d[i:]  # taken before it is done: a frame that raises is gone
+            self._do(cmd, bytes(d[i - length + 2 : i]))  # its parameters
         self._in = d[i:]
 
     def _do(self, cmd, p):
@@ -168,7 +174,10 @@ class SimController:
             end = None
             if times:
                 run_ms = self.groups[group] * 100 // self.speed(group)
-                end = time.ticks_add(now, times * run_ms)
+                try:
+                    end = time.ticks_add(now, times * run_ms)
+                except OverflowError:  # longer than the ticks can tell (days): until stopped
+                    end = None
             self._running = (group, times, end)
             self._send(CMD_ACTION_GROUP_RUN, group, p[1], p[2])
         elif cmd == CMD_ACTION_GROUP_STOP:

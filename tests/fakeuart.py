@@ -4,6 +4,7 @@
 #   uart.feed(b"\x55\x55\x02\x07")             # bytes the controller "sent"
 #   uart.reply(request, response, delay_ms=5)  # answer a write, after a while
 #   uart.chunks = [1]                          # readinto() hands out 1 byte a call
+#   uart.takes = [3, None]                     # write() takes 3 bytes, then none
 #   uart.written()                             # every byte the driver wrote
 #
 # Like machine.UART, read() and readinto() return None when nothing is waiting
@@ -21,6 +22,7 @@ class FakeUART:
         self._out = bytearray(4096)
         self._nout = 0
         self.writes = 0  # number of write() calls
+        self.takes = None  # sizes write() takes in turn (None: nothing); None: all
         self._replies = {}
         self._later = []  # [(due ticks_ms, bytes)], in order
 
@@ -70,7 +72,7 @@ class FakeUART:
         n = self.any()
         if not n:
             return None
-        if nbytes is None:
+        if nbytes is None or nbytes > len(buf):
             nbytes = len(buf)
         if n > nbytes:
             n = nbytes
@@ -93,15 +95,27 @@ class FakeUART:
         buf = bytearray(n if nbytes is None else min(n, nbytes))
         return bytes(buf[: self.readinto(buf)])
 
-    def write(self, buf, nbytes=None):
+    def write(self, buf, off=None, nbytes=None):
+        # The stream protocol's forms: write(buf), write(buf, n), write(buf, off, n).
         if nbytes is None:
-            nbytes = len(buf)
+            nbytes = len(buf) if off is None else off
+            off = 0
+        if off > len(buf):
+            off = len(buf)
+        if nbytes > len(buf) - off:
+            nbytes = len(buf) - off
+        if self.takes:  # a full transmit buffer: take less, or nothing (None)
+            take = self.takes.pop(0)
+            if take is None:
+                return None
+            if nbytes > take:
+                nbytes = take
         out = self._out
         at = self._nout
         if at + nbytes > len(out):
             out = self._out = out + bytearray(at + nbytes)
         for i in range(nbytes):
-            out[at + i] = buf[i]
+            out[at + i] = buf[off + i]
         self._nout = at + nbytes
         self.writes += 1
         if self._replies:

@@ -77,6 +77,17 @@ class Allocation(unittest.TestCase):
 
         self.assertNoHeap(self.bus.poll, half)
 
+    def test_finishing_a_frame_the_uart_took_part_of_allocates_nothing(self):
+        # write() takes 3 bytes, then none, then the rest: uart.write(buf, off, n).
+        six = [(1, 100), (2, 200), (3, 300), (4, 400), (5, 500), (6, 600)]
+        for call in (lambda: self.bus.move(1, 500, 0), lambda: self.bus.move_many(six, 0)):
+            self.uart.clear()
+            self.assertNoHeap(call, lambda: setattr(self.uart, "takes", [3, None, 100]))
+
+    def test_wire_ms_and_pending_allocate_nothing(self):
+        self.assertNoHeap(self.bus.wire_ms)
+        self.assertNoHeap(lambda: self.bus.pending(busservo.CMD_GET_BATTERY_VOLTAGE))
+
     def test_the_fake_uart_itself_allocates_nothing(self):
         # Else the figures above would measure the fake, not the driver.
         buf = bytearray(8)

@@ -101,6 +101,32 @@ class Commands(unittest.TestCase):
         self.bus.request_positions(range(84))
         self.assertEqual(self.uart.written()[:5], bytes((0x55, 0x55, 87, 0x15, 84)))
 
+    def test_a_frame_the_uart_takes_in_parts_leaves_whole_and_once(self):
+        # A full transmit buffer: write() takes 3 bytes, then none, then 4, then the rest.
+        self.uart.takes = [3, None, None, 4]
+        self.bus.move(1, 800, 1000)
+        self.assertEqual(
+            self.uart.written(),
+            bytes((0x55, 0x55, 0x08, 0x03, 0x01, 0xE8, 0x03, 0x01, 0x20, 0x03)),
+        )
+
+    def test_a_uart_that_takes_nothing_raises_eio_and_the_cut_frame_goes_first_next(self):
+        import errno
+
+        move_1 = bytes((0x55, 0x55, 0x08, 0x03, 0x01, 0xE8, 0x03, 0x01, 0x20, 0x03))
+        self.uart.takes = [4] + [None] * 100000
+        with self.assertRaises(OSError):
+            self.bus.move(1, 800, 1000)
+        try:
+            self.bus.stop_group()  # still nothing taken: it cannot start, and says so
+        except OSError as e:
+            self.assertEqual(e.args[0], errno.EIO)
+        else:
+            self.fail("a frame started after a cut one")
+        self.uart.takes = None
+        self.bus.stop_group()  # the rest of the move first, then the STOP
+        self.assertEqual(self.uart.written(), move_1 + bytes((0x55, 0x55, 0x02, 0x07)))
+
     def test_constants_have_the_protocol_numbers(self):
         self.assertEqual(
             (
@@ -172,6 +198,11 @@ BAD_INPUT = (
     ("read_positions", ([1], "x"), TypeError, ("timeout_ms",)),
     ("read_battery", (-1,), ValueError, ("timeout_ms",)),
     ("read_battery", (1.5,), TypeError, ("timeout_ms",)),
+    ("read_battery", (60001,), ValueError, ("timeout_ms", "0..60000", "60001")),
+    ("request_battery", (-5,), ValueError, ("timeout_ms", "0..60000", "-5")),
+    ("request_positions", ([1], 1.5), TypeError, ("timeout_ms", "1.5")),
+    ("unload", (list(range(300)),), ValueError, ("ids", "1..252", "got 300")),
+    ("pending", (3,), ValueError, ("cmd", "3")),
 )
 
 

@@ -1,4 +1,5 @@
 # The simulated controller, driven by the real driver, on a clock the tests step.
+import time
 import unittest
 
 import busservo
@@ -134,6 +135,44 @@ class Simulator(unittest.TestCase):
             self.fail("a silent simulator answered")
         self.sim.silent = False
         self.assertEqual(self.bus.read_battery(), 7500)
+
+    # As a UART: the stream protocol's forms, and no surprises for the caller.
+
+    def test_readinto_never_resizes_the_callers_buffer(self):
+        self.sim.write(bytes((0x55, 0x55, 0x02, 0x0F)))  # 6 bytes come back
+        buf = bytearray(2)
+        self.assertEqual(self.sim.readinto(buf, 10), 2)
+        self.assertEqual(len(buf), 2)
+        self.assertEqual(self.sim.any(), 4)
+
+    def test_write_takes_the_stream_protocols_forms(self):
+        run_8 = bytes((0x55, 0x55, 0x05, 0x06, 0x08, 0x01, 0x00))
+        self.assertEqual(self.sim.write(b"xx" + run_8, 2, 3), 3)
+        self.assertEqual(self.sim.write(run_8, 3, 100), 4)  # clamped to the buffer
+        self.assertEqual(self.sim.running, 8)
+        self.assertEqual(self.sim.write(run_8 + b"zz", 7), 7)
+        self.assertEqual(self.sim.beeps, 0)
+
+    def test_a_group_longer_than_the_ticks_can_tell_does_not_wedge_it(self):
+        # On a board, ticks_add() refuses a span of half the ticks' period
+        # (2**29 ms, 6 days): 65535 runs of a 2 s group at 1 % is 150 years.
+        import busservo_sim
+        import wire
+
+        clock = wire.Clock()
+        busservo_sim.time = clock
+        try:
+            sim = SimController(ticks_ms=clock.ticks_ms)
+            bus = busservo.BusServo(sim)
+            bus.set_group_speed(2, 1)
+            bus.run_group(2, 65535)
+            self.assertEqual(sim.running, 2)  # until stopped
+            bus.stop_group()
+            self.assertIsNone(sim.running)
+            bus.run_group(8)
+            self.assertEqual(sim.running, 8)
+        finally:
+            busservo_sim.time = time
 
 
 if __name__ == "__main__":
