@@ -8,6 +8,7 @@
 #
 # Wiring for an adapter: its TX to the controller's RX, its RX to the
 # controller's TX, GND to GND; the servos take their power from the controller.
+import errno
 import select
 import termios
 
@@ -28,37 +29,55 @@ def uart(path, baudrate=9600):
 class SerialUART:
     def __init__(self, path, baudrate=9600):
         if baudrate not in _BAUDRATES:
-            raise ValueError("baudrate must be one of %s" % sorted(_BAUDRATES))
+            raise ValueError("baudrate must be one of %s, got %r" % (sorted(_BAUDRATES), baudrate))
+        self.path = path
         try:
             self._file = open(path, "r+b")
         except OSError as e:
             raise OSError(e.args[0], "cannot open serial device %s" % path)
-        fd = self._file.fileno()
-        termios.setraw(fd)  # no echo, no line editing, 8 bits through untouched
-        attrs = termios.tcgetattr(fd)
+        try:
+            fd = self._file.fileno()
+            termios.setraw(fd)  # no echo, no line editing, 8 bits through untouched
+            attrs = termios.tcgetattr(fd)
+        except OSError as e:
+            self._file.close()  # not a tty: give the descriptor back
+            raise OSError(e.args[0], "%s is not a serial device" % path)
         attrs[4] = attrs[5] = _BAUDRATES[baudrate]
         # Reads return at once with what has arrived, as machine.UART's do.
         attrs[6][_VMIN] = 0
         attrs[6][_VTIME] = 0
         termios.tcsetattr(fd, termios.TCSANOW, attrs)
-        self._poll = select.poll()
-        self._poll.register(self._file, select.POLLIN)
+        self._in = select.poll()
+        self._in.register(self._file, select.POLLIN)
+        self._out = select.poll()
+        self._out.register(self._file, select.POLLOUT)
         self._buf = bytearray(256)  # read ahead, so any() can count
         self._start = 0
         self._end = 0
 
+    def _ready(self, poller):
+        # Whether the device is ready (poll with no wait); a hang-up raises.
+        for _, event in poller.poll(0):
+            if event & (select.POLLHUP | select.POLLERR):
+                raise OSError(errno.EIO, "%s: the serial device hung up" % self.path)
+            return True
+        return False
+
     def any(self):
         """Bytes waiting to be read."""
-        if self._start == self._end and self._poll.poll(0):
+        if self._start == self._end and self._ready(self._in):
+            n = self._file.readinto(self._buf)
+            if not n:  # ready, yet nothing: the other end has gone
+                raise OSError(errno.EIO, "%s: the serial device hung up" % self.path)
             self._start = 0
-            self._end = self._file.readinto(self._buf) or 0
+            self._end = n
         return self._end - self._start
 
     def readinto(self, buf, nbytes=None):
         n = self.any()
         if not n:
             return None
-        if nbytes is None:
+        if nbytes is None or nbytes > len(buf):
             nbytes = len(buf)
         if n > nbytes:
             n = nbytes
@@ -75,14 +94,20 @@ class SerialUART:
         buf = bytearray(n if nbytes is None else min(n, nbytes))
         return bytes(buf[: self.readinto(buf)])
 
-    def write(self, buf, nbytes=None):
-        """Write the first nbytes of buf (all of it by default); returns when written."""
+    def write(self, buf, off=None, nbytes=None):
+        """As machine.UART.write() on a port with timeout=0: what the device
+        takes now (the stream protocol's write(buf), write(buf, n) and
+        write(buf, off, n)), or None if it takes nothing. It never waits: a
+        device reports itself writable with fewer than 256 bytes waiting, and
+        this writes at most 256 at a time."""
         if nbytes is None:
-            nbytes = len(buf)
-        done = 0
-        while done < nbytes:
-            done += self._file.write(buf[done:nbytes]) or 0
-        return nbytes
+            nbytes = len(buf) if off is None else off
+            off = 0
+        off = min(off, len(buf))
+        nbytes = min(nbytes, len(buf) - off, 256)
+        if not self._ready(self._out):
+            return None
+        return self._file.write(buf, off, nbytes) or None
 
     def close(self):
         self._file.close()

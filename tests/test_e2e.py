@@ -99,6 +99,51 @@ class EndToEnd(unittest.TestCase):
             self.fail("no timeout")
         self.assertTrue(time.ticks_diff(time.ticks_ms(), start) >= 200)
 
+    def test_a_hang_up_raises_eio_at_once(self):
+        # The other end goes away (an unplugged adapter; here the pty's server):
+        # the next call says so, rather than reading nothing for ever.
+        self.assertEqual(self.bus.read_battery(), 7500)
+        os.system("kill $(cat %s.pid)" % self.link)
+        start = time.ticks_ms()
+        error = None
+        while error is None and time.ticks_diff(time.ticks_ms(), start) < 5000:
+            try:
+                self.bus.poll()
+            except OSError as e:
+                error = e
+        self.assertIsNotNone(error, "no hang-up noticed")
+        self.assertEqual(error.args[0], errno.EIO)
+        self.assertIn("hung up", str(error))
+
+    def test_writes_never_block_and_take_the_stream_protocols_forms(self):
+        frame = b"xx" + bytes((0x55, 0x55, 0x02, 0x0F)) + b"yy"
+        self.assertEqual(self.uart.write(frame, 2, 4), 4)  # a battery request
+        self.assertEqual(self.events_until(busservo.CMD_GET_BATTERY_VOLTAGE, 2000), [15])
+        start = time.ticks_ms()
+        took = 0
+        for _ in range(200):  # far more than the pty holds: it takes less, never waits
+            took += self.uart.write(bytes(256)) or 0
+        self.assertTrue(time.ticks_diff(time.ticks_ms(), start) < 1000)
+        self.assertTrue(took < 200 * 256)
+
+
+class NotATty(unittest.TestCase):
+    def test_a_file_that_is_no_serial_device_is_refused_and_closed(self):
+        path = "/tmp/busservo-not-a-tty-%s" % "".join("%02x" % b for b in os.urandom(4))
+        with open(path, "w") as f:
+            f.write("x")
+        before = len(os.listdir("/proc/self/fd"))
+        try:
+            uart(path)
+        except OSError as e:
+            self.assertIn("not a serial device", str(e))
+            self.assertIn(path, str(e))
+        else:
+            self.fail("a regular file was taken for a serial device")
+        finally:
+            os.remove(path)
+        self.assertEqual(len(os.listdir("/proc/self/fd")), before)
+
 
 if __name__ == "__main__":
     unittest.main()
