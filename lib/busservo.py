@@ -32,7 +32,7 @@ _QUEUE = const(32)  # frames a blocking query may hold back for poll()
 _TIMEOUT_MS = const(100)  # battery: 10 bytes at 9600 baud take about 10 ms
 _TIMEOUT_PER_ID_MS = const(10)  # 4 more bytes on the wire and one servo to ask
 _TIMEOUT_MAX_MS = const(60000)
-_WINDOW_MS = const(65536)  # longer than any request's reply may take
+_WINDOW_MS = const(65536)  # longer than any reply may be due
 _LATE_MS = const(100)  # how long after its query gave up a reply may still come
 _GAP_MS = const(20)  # a frame's bytes come closer together than this, FIFOs and all
 _TICKS = const(0x3FFFFFFF)  # wire times are ticks_us() modulo 2**30, on every port
@@ -62,9 +62,12 @@ def _count(name, items, high):
     try:
         n = len(items)
     except TypeError:
-        raise TypeError("%s must be a sequence of 1..%d items, got %r" % (name, high, items))
+        n = -1  # not a sequence at all: say what it is
     if not 1 <= n <= high:
-        raise ValueError("%s must hold 1..%d items, got %d" % (name, high, n))
+        error = TypeError if n < 0 else ValueError
+        raise error(
+            "%s must be a sequence of 1..%d items, got %r" % (name, high, n if n >= 0 else items)
+        )
     return n
 
 
@@ -80,6 +83,7 @@ class BusServo:
         self._idle = time.ticks_us() & _TICKS
         self._cut_at = 0  # bytes of it sent (0: nothing is cut)
         self._tx = bytearray(_FRAME_MAX)
+        self._tx[0] = self._tx[1] = _HEADER  # reading never uses tx: it stays
         # move() is the call a control loop makes most: it has a frame of its
         # own, with the header, Length, command and count already in place.
         self._move = bytearray((_HEADER, _HEADER, 8, CMD_SERVO_MOVE, 1, 0, 0, 0, 0, 0))
@@ -157,8 +161,8 @@ class BusServo:
                 or servo_id >> 8
                 or position >> 16
             ):
-                _check("servo_id in servos", servo_id, 0, 0xFF)
-                _check("position in servos", position, 0, 0xFFFF)
+                _check("servo_id", servo_id, 0, 0xFF)
+                _check("position", position, 0, 0xFFFF)
             tx[i] = servo_id
             tx[i + 1] = position
             tx[i + 2] = position >> 8
@@ -170,7 +174,7 @@ class BusServo:
 
     def run_group(self, group, times=1):
         """CMD_ACTION_GROUP_RUN: run action group `group` `times` times; 0 = forever."""
-        self._group_command(CMD_ACTION_GROUP_RUN, group, "times", times)
+        self._group_cmd(CMD_ACTION_GROUP_RUN, group, "times", times)
 
     def stop_group(self):
         """CMD_ACTION_GROUP_STOP: stop the running action group, if any."""
@@ -179,39 +183,35 @@ class BusServo:
     def set_group_speed(self, group, percent):
         """CMD_ACTION_GROUP_SPEED: run `group` (ALL_GROUPS for all) at percent %.
         The controller forgets this at power-off."""
-        self._group_command(CMD_ACTION_GROUP_SPEED, group, "percent", percent)
+        self._group_cmd(CMD_ACTION_GROUP_SPEED, group, "percent", percent)
 
     def unload(self, ids):
         """CMD_MULT_SERVO_UNLOAD: let 1..252 servos go limp."""
-        self._ids_command(CMD_MULT_SERVO_UNLOAD, ids, 252)
+        self._ids_cmd(CMD_MULT_SERVO_UNLOAD, ids, 252)
 
-    def request_battery(self, timeout_ms=_TIMEOUT_MS):
-        """CMD_GET_BATTERY_VOLTAGE: ask for the voltage; the reply comes through
-        poll(). pending() is True until it has come, or timeout_ms after the
-        request has left the wire (and 100 ms more, for a late reply)."""
-        _check("timeout_ms", timeout_ms, 0, _TIMEOUT_MAX_MS)
+    def request_battery(self):
+        """CMD_GET_BATTERY_VOLTAGE: ask for the voltage; the reply comes through poll()."""
         self._send(CMD_GET_BATTERY_VOLTAGE, 0)
-        self._asking(0, timeout_ms)
+        self._asking(0, _TIMEOUT_MS)
 
-    def request_positions(self, ids, timeout_ms=None):
+    def request_positions(self, ids):
         """CMD_MULT_SERVO_POS_READ: ask for 1..84 positions (the reply must fit
-        in a Length byte); the reply comes through poll(), as request_battery()'s."""
-        n = _count("ids", ids, 84)
-        if timeout_ms is None:
-            timeout_ms = _TIMEOUT_MS + _TIMEOUT_PER_ID_MS * n
-        _check("timeout_ms", timeout_ms, 0, _TIMEOUT_MAX_MS)
-        self._ids_command(CMD_MULT_SERVO_POS_READ, ids, 84)
-        asked = self._asked
-        for i in range(n + 1):
-            asked[i] = self._tx[4 + i]  # the count and the ids, as sent
-        self._asking(1, timeout_ms)
+        in a Length byte); the reply comes through poll()."""
+        self._ids_cmd(CMD_MULT_SERVO_POS_READ, ids, 84)
+        tx = self._tx
+        for i in range(tx[4] + 1):
+            self._asked[i] = tx[4 + i]  # the count and the ids, as sent
+        self._asking(1, _TIMEOUT_MS + _TIMEOUT_PER_ID_MS * tx[4])
 
     def _asking(self, kind, timeout_ms):
-        # A reply to the request just sent may come until timeout_ms after it
-        # has left the wire, and a late one for _LATE_MS more.
-        self._due[kind] = time.ticks_add(time.ticks_ms(), self.wire_ms() + timeout_ms + _LATE_MS)
+        # The reply to the request just sent is due within timeout_ms of its
+        # leaving the wire (the deadline, returned); a late one may come for
+        # _LATE_MS more. _due[kind] is None once it has come.
+        deadline = time.ticks_add(time.ticks_ms(), self.wire_ms() + timeout_ms)
+        self._due[kind] = time.ticks_add(deadline, _LATE_MS)
+        return deadline
 
-    def _group_command(self, cmd, group, name, value):
+    def _group_cmd(self, cmd, group, name, value):
         _check("group", group, 0, 0xFF)
         _check(name, value, 0, 0xFFFF)
         if self._cut_at:
@@ -222,7 +222,7 @@ class BusServo:
         tx[6] = value >> 8
         self._send(cmd, 3)
 
-    def _ids_command(self, cmd, ids, high):
+    def _ids_cmd(self, cmd, ids, high):
         n = _count("ids", ids, high)
         if self._cut_at:
             self._finish()  # before tx, which may hold its rest, is overwritten
@@ -250,7 +250,6 @@ class BusServo:
         if self._cut_at:
             self._finish()
         tx = self._tx
-        tx[0] = tx[1] = _HEADER
         tx[2] = nparams + 2
         tx[3] = cmd
         n = nparams + 4
@@ -306,7 +305,8 @@ class BusServo:
     def read_battery(self, timeout_ms=_TIMEOUT_MS):
         """Battery voltage in mV. Raises OSError(ETIMEDOUT) if no reply comes
         within timeout_ms of the request leaving the wire."""
-        self._query(CMD_GET_BATTERY_VOLTAGE, None, timeout_ms)
+        for _ in self.ask(None, timeout_ms):
+            pass
         return self.battery
 
     def read_positions(self, ids, timeout_ms=None):
@@ -314,50 +314,56 @@ class BusServo:
         near 0 may say -3). Raises OSError(ETIMEDOUT) if no reply comes; the
         default timeout is 100 ms plus 10 ms per servo. Only a reply that
         carries exactly these ids, in this order, answers it."""
-        self._query(CMD_MULT_SERVO_POS_READ, ids, timeout_ms)
+        for _ in self.ask(ids, timeout_ms):
+            pass
         got = {}
         for servo_id in ids:
             got[servo_id] = self.positions[servo_id]
         return got
 
-    def pending(self, cmd):
-        """True while the reply to the last request of this kind
-        (CMD_GET_BATTERY_VOLTAGE or CMD_MULT_SERVO_POS_READ) may still come."""
-        kind = cmd == CMD_MULT_SERVO_POS_READ
-        if not kind and cmd != CMD_GET_BATTERY_VOLTAGE:
-            raise ValueError("cmd must be a query's, got %r" % cmd)
-        due = self._due[kind]
-        if due is not None and not 0 < time.ticks_diff(due, time.ticks_ms()) < _WINDOW_MS:
-            due = self._due[kind] = None  # its time has run out
-        return due is not None
-
-    def _query(self, cmd, ids, timeout_ms):
-        kind = cmd == CMD_MULT_SERVO_POS_READ
-        deadline = None  # not asked yet
+    def ask(self, ids=None, timeout_ms=None):
+        """A query step by step, for a scheduler such as busservo_async: a
+        generator that asks for the battery (ids None) or for the positions of
+        ids, yields while it waits, and ends once the reply has come (then
+        battery or positions hold it). It raises as read_battery() does."""
+        kind = ids is not None  # _due[kind]: the battery's, or the positions'
+        if timeout_ms is None:
+            timeout_ms = _TIMEOUT_MS + _TIMEOUT_PER_ID_MS * _count("ids", ids, 84)
+        _check("timeout_ms", timeout_ms, 0, _TIMEOUT_MAX_MS)
+        while True:  # decode what has come first: none of it answers this query
+            got = self._next_frame()
+            if got is None:
+                due = self._due[kind]
+                if due is None or not 0 < time.ticks_diff(due, time.ticks_ms()) < _WINDOW_MS:
+                    break  # no earlier request of this kind can still be answered
+                yield
+            self._hold(got)
+        if kind:
+            self.request_positions(ids)  # checks the ids
+        else:
+            self.request_battery()
+        deadline = self._asking(kind, timeout_ms)
         late = 0  # frames decoded since the deadline: one last look, then give up
         while True:
-            if deadline is not None and (late or time.ticks_diff(time.ticks_ms(), deadline) >= 0):
+            if late or time.ticks_diff(time.ticks_ms(), deadline) >= 0:
                 late += 1
             got = self._next_frame()
-            if deadline is None:
-                # Decode what has come first (none of it answers this query), and
-                # let an earlier request's reply come or its time run out. Then ask.
-                if got is None and not self.pending(cmd):
-                    if kind:
-                        self.request_positions(ids, timeout_ms)  # checks the arguments
-                    else:
-                        self.request_battery(timeout_ms)
-                    deadline = time.ticks_add(self._due[kind], -_LATE_MS)
-            elif got == cmd and self._due[kind] is None:
+            if self._due[kind] is None:
                 return  # the reply: it matched the request
-            elif got is None and late or late > _QUEUE:
+            if got is None and late or late > _QUEUE:
                 raise OSError(errno.ETIMEDOUT)
-            if got is not None:  # hold it for poll(); its state is applied
-                if self._queued < _QUEUE:
-                    self._queue[self._queued] = got
-                    self._queued += 1
-                else:
-                    self.lost += 1
+            if got is None:
+                yield
+            self._hold(got)
+
+    def _hold(self, cmd):
+        # Keep a frame that came during a query for poll(); its state is applied.
+        if cmd is not None:
+            if self._queued < _QUEUE:
+                self._queue[self._queued] = cmd
+                self._queued += 1
+            else:
+                self.lost += 1
 
     # Frames from the controller.
 

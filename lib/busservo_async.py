@@ -11,18 +11,18 @@
 #   async for cmd in bus.events():                # every frame, as poll() gives them
 #       ...
 #
-# How it works. Whichever task is waiting reads the frames that have come (no
-# background task: nothing to start or stop), every poll_ms, and hands each to
-# whoever wants it: a query takes its own reply; wait_group_done() sees the end
-# of a group; every other frame, the group's end included, is held for events()
-# and poll(), up to `queue` of them (more are counted in `lost`, not hidden).
+# How it works. There is no background task: nothing to start or stop. A query
+# runs the driver's own query (BusServo.ask(), a generator) a step every
+# poll_ms, so the driver alone decides which reply answers it: one that
+# matches (a position reply must carry the ids asked), never a late reply to
+# an earlier query, cancelled or timed out (the next query lets it come, as an
+# event, before it asks). Whichever task waits reads the frames that have come
+# and hands each to whoever wants it: wait_group_done() sees the end of its
+# group; every frame is held for events() and poll(), up to `queue` of them
+# (more are counted in `lost`, not hidden).
 #
 # Queries are serialised: one request is on the bus at a time, and a second
 # task's query waits for the first one's reply (or timeout) before it asks.
-# The protocol numbers no requests, so this is how a reply is known to be the
-# answer to the request just made; the driver checks that it matches (a
-# position reply must carry the ids asked) and, after a query timed out or was
-# cancelled, lets its late reply come (as an event) before the next one asks.
 # A timeout raises OSError(ETIMEDOUT), as the blocking API does. Use this
 # object's poll() and events(), not the BusServo's poll() or blocking queries,
 # so that no frame goes past the waiting tasks.
@@ -35,19 +35,7 @@ from busservo import (
     CMD_ACTION_GROUP_COMPLETE,
     CMD_ACTION_GROUP_RUN,
     CMD_ACTION_GROUP_STOP,
-    CMD_GET_BATTERY_VOLTAGE,
-    CMD_MULT_SERVO_POS_READ,
 )
-
-
-def _check_timeout(timeout_ms, none_ok=False):
-    # As the driver checks it, before anything is written.
-    if timeout_ms is None and none_ok:
-        return
-    if type(timeout_ms) is not int:
-        raise TypeError("timeout_ms must be an int in 0..60000, got %r" % (timeout_ms,))
-    if not 0 <= timeout_ms <= 60000:
-        raise ValueError("timeout_ms must be an int in 0..60000, got %r" % (timeout_ms,))
 
 
 class AsyncBusServo:
@@ -59,7 +47,7 @@ class AsyncBusServo:
         self.lost = 0  # frames not held because `queue` were waiting already
         self._queue = queue
         self._held = []  # commands for events() and poll(), oldest first
-        self._waiters = []  # [commands wanted, a query's?, what came]
+        self._waiters = []  # wait_group_done()'s: [commands wanted, what came]
         # The group run_group() started: None (none), False (asked, its RUN not
         # seen yet: an end that comes now is an earlier group's), True (running),
         # or how it ended.
@@ -77,34 +65,19 @@ class AsyncBusServo:
 
     async def read_battery(self, timeout_ms=100):
         """Battery voltage in mV."""
-        _check_timeout(timeout_ms)
         async with self._asking:
-            await self._ask(CMD_GET_BATTERY_VOLTAGE, None, timeout_ms)
+            for _ in self.bus.ask(None, timeout_ms):  # checks timeout_ms first
+                await asyncio.sleep_ms(self.poll_ms)
             return self.bus.battery
 
     async def read_positions(self, ids, timeout_ms=None):
         """{servo_id: position} for 1..84 servos; the default timeout is 100 ms
         plus 10 ms per servo."""
-        _check_timeout(timeout_ms, True)
         async with self._asking:
-            await self._ask(CMD_MULT_SERVO_POS_READ, ids, timeout_ms)
+            for _ in self.bus.ask(ids, timeout_ms):
+                await asyncio.sleep_ms(self.poll_ms)
             positions = self.bus.positions
             return {servo_id: positions[servo_id] for servo_id in ids}
-
-    async def _ask(self, cmd, ids, timeout_ms):
-        bus = self.bus
-        while bus.pending(cmd):  # an earlier request's reply may still come
-            self._dispatch()
-            await asyncio.sleep_ms(self.poll_ms)
-        self._dispatch()  # what came before answers no request of ours
-        if ids is None:
-            bus.request_battery(timeout_ms)
-        else:
-            bus.request_positions(ids, timeout_ms)  # checks ids
-            if timeout_ms is None:
-                timeout_ms = 100 + 10 * len(ids)
-        # The timeout counts from when the request has left the wire.
-        await self._wait((cmd,), True, bus.wire_ms() + timeout_ms)
 
     def run_group(self, group, times=1):
         """As BusServo.run_group()."""
@@ -119,12 +92,14 @@ class AsyncBusServo:
         waits as long as it takes. If it ended already (while another task
         awaited, say), this returns at once."""
         if timeout_ms is not None and (type(timeout_ms) is not int or timeout_ms < 0):
-            _check_timeout(-1 if type(timeout_ms) is int else timeout_ms)
+            raise (ValueError if type(timeout_ms) is int else TypeError)(
+                "timeout_ms must be None or an int >= 0, got %r" % (timeout_ms,)
+            )
         self._dispatch()
         if self._run is not None and self._run is not False and self._run is not True:
             return self._run
         wanted = (CMD_ACTION_GROUP_COMPLETE, CMD_ACTION_GROUP_STOP)
-        return await self._wait(wanted, False, timeout_ms)
+        return await self._wait(wanted, timeout_ms)
 
     # Frames.
 
@@ -147,15 +122,15 @@ class AsyncBusServo:
                 return cmd
             await asyncio.sleep_ms(self.poll_ms)
 
-    async def _wait(self, wanted, query, timeout_ms):
-        waiter = [wanted, query, None]
+    async def _wait(self, wanted, timeout_ms):
+        waiter = [wanted, None]
         self._waiters.append(waiter)
         start = time.ticks_ms()
         try:
             while True:
                 self._dispatch()
-                if waiter[2] is not None:
-                    return waiter[2]
+                if waiter[1] is not None:
+                    return waiter[1]
                 if (
                     timeout_ms is not None
                     and time.ticks_diff(time.ticks_ms(), start) >= timeout_ms
@@ -167,6 +142,10 @@ class AsyncBusServo:
 
     def _dispatch(self):
         # Hand every frame that has come to whoever waits for it, oldest first.
+        # While a query runs, it alone decodes (so that its reply cannot become
+        # an event); the frames it holds back come here once it is done.
+        if self._asking.locked():
+            return
         bus = self.bus
         while True:
             cmd = bus.poll()
@@ -178,15 +157,11 @@ class AsyncBusServo:
             elif end and self._run is True:
                 self._run = cmd
             for waiter in self._waiters:
-                if waiter[2] is None and cmd in waiter[0]:
-                    if waiter[1]:  # a query takes its reply, and only its reply
-                        if not bus.pending(cmd):
-                            waiter[2] = cmd
-                            break
-                    elif self._run is not False:  # not an earlier group's end
-                        waiter[2] = cmd
-            else:  # nobody took it: hold it for events() and poll()
-                if len(self._held) < self._queue:
-                    self._held.append(cmd)
-                else:
-                    self.lost += 1
+                # A group's end, unless it is an earlier group's. It is still
+                # held below: wait_group_done() looks, it does not take.
+                if waiter[1] is None and cmd in waiter[0] and self._run is not False:
+                    waiter[1] = cmd
+            if len(self._held) < self._queue:
+                self._held.append(cmd)
+            else:
+                self.lost += 1

@@ -5,7 +5,7 @@
 #   sim = busservo_sim.SimController()
 #   bus = busservo.BusServo(sim)    # sim has machine.UART's any/read/readinto/write
 #
-# It decodes what the driver writes and answers as ../shared/protocol.md says:
+# It decodes what the driver writes and answers as the protocol says:
 # - servos move linearly from where they are to their target over time_ms, so a
 #   position read mid-move gives the value in between (servos start at 500);
 # - action groups (`groups`, {group: ms per run}) run `times` times or forever,

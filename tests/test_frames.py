@@ -1,5 +1,5 @@
 # What the driver makes of the frames the controller sends (section II of
-# ../shared/protocol.md, and the replies of section I), however they arrive.
+# the protocol document, and the replies of section I), however they arrive.
 import unittest
 
 import busservo

@@ -319,6 +319,27 @@ class Async(unittest.TestCase):
         for port, w, bus in async_ports():
             self.assertEqual(asyncio.run(main(w, bus)), (CMD_ACTION_GROUP_COMPLETE, 1), port)
 
+    def test_a_querys_reply_is_never_an_event_for_another_task(self):
+        async def main(w, bus):
+            got = []
+
+            async def listen():
+                while True:
+                    cmd = bus.poll()
+                    if cmd is not None:
+                        got.append(cmd)
+                    await busservo_async.asyncio.sleep_ms(1)
+
+            listener = asyncio.create_task(listen())
+            await busservo_async.asyncio.sleep_ms(0)
+            volts = await bus.read_battery()
+            await busservo_async.asyncio.sleep_ms(20)
+            listener.cancel()
+            return volts, got
+
+        for port, w, bus in async_ports():
+            self.assertEqual(asyncio.run(main(w, bus)), (7500, []), port)
+
     def test_a_bad_timeout_writes_nothing(self):
         for port, w, bus in async_ports():
             for bad in (-1, 60001, 1.5, "100"):
