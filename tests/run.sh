@@ -50,7 +50,7 @@ for t in tests/test_*.py; do
     run_module "$name:" "$name"
 done
 
-# Again, against lib/ compiled by mpy-cross -O2 and nothing else: the form most boards run.
+# Again, against lib/ compiled by mpy-cross -O3 and nothing else: the form most boards run.
 if sh boards/unix.sh --mpy >/dev/null; then
     for t in tests/test_*.py; do
         name=$(basename "$t" .py)

