@@ -2,412 +2,1060 @@
 # UART modelled on MicroPython's own ports, the serial line at 10 bits a byte,
 # and the simulated controller (lib/busservo_sim.py) at its far end.
 #
-#   w = wire.World("rp2")            # or "esp32"; wire.PORTS names them all
+#   w = wire.World("rp2")            # or "esp32": wire.PORTS names them all
 #   busservo.time = w.clock          # the driver's clock is the world's
 #   bus = busservo.BusServo(w.uart)
-#   w.clock.advance_ms(20)           # time passes; bytes cross the wire meanwhile
+#   w.clock.advance_ms(20)           # time passes; the wire catches up when looked at
 #   w.frames(), w.garbled            # what the controller received
 #   w.noise(b"\x55\x55\x05")         # faults: noise, drop, cut_reply, late,
 #   w.uart.fail("readinto", OSError(5)), w.uart.during(...), w.uart.stall(True)
 #
+# Time is whole microseconds (w.clock.now_us), and nothing real is used: the
+# same test gives the same bytes at the same times, every run. Each ticks read
+# costs cost_us and each UART call call_us, so a busy loop moves on; a UART
+# call that waits (as a port's does) moves the clock to where the wait ends.
+# The wire is lazy: whatever a UART call or a World method looks at, the wire
+# is first brought up to the clock, event by event in time order.
+#
 # What the models do, as read in MicroPython's source:
-# - ports/rp2/machine_uart.c: the transmit and receive rings hold txbuf and
-#   rxbuf bytes (256 each by default; allocated one larger, as py/ringbuf.h
-#   keeps one slot free), behind 32-byte hardware FIFOs. write() puts in the
-#   ring what fits, then waits for room while less than `timeout` ms (0 by
-#   default) have passed since it began, or `timeout_char` ms (at least 13 bit
-#   times: 2 ms at 9600 baud) since the last byte it put; when that runs out it
-#   returns what it put, or EAGAIN (None) if nothing. any() and read() first
-#   move the hardware FIFO into the ring; bytes that find both full are lost
-#   (an overrun). read() waits for each byte as write() does for room.
-# - ports/esp32/machine_uart.c: txbuf and rxbuf default to 256 bytes (128-byte
-#   FIFOs); write() is uart_write_bytes(), which blocks until all of it is in the
-#   buffer. Received bytes reach the buffer, and any(), from the FIFO when the
-#   rx full threshold has gathered or the line has been idle for the rx
-#   timeout. With timeout_char=0 (the default) MicroPython sets the threshold
-#   to 1 byte; with a longer timeout_char it keeps ESP-IDF's 120 and sets the
-#   rx timeout to timeout_char in character times, so up to 120 bytes can sit
-#   unseen in the FIFO in the middle of a long frame. When both are full the
-#   FIFO overflows and is flushed.
-# - py/stream.c: write(buf, n) writes the first n bytes, write(buf, off, n) n
-#   bytes from off (clamped to the buffer); readinto(buf, n) clamps n to
-#   len(buf); a read or write that could do nothing returns None.
-# - extmod/modtime.c: ticks wrap at 2**30 on 32-bit ports; ticks_diff() is
-#   signed modulo that period; ticks_add() refuses a delta of half of it.
+# - extmod/machine_uart.c binds UART.read, readinto and write to py/stream.c's
+#   read1, readinto1 and write1: ONE call of the port's read or write function
+#   a call, no retry loop. py/stream.c: write(buf, n) and readinto(buf, n) take
+#   MIN(len(buf), n), write(buf, off, n) clamps off to len(buf) and n to the
+#   rest; off and n are size_t, so a negative one means "no limit". A size of 0
+#   calls nothing and gives 0 (read(0): b""). A port's EAGAIN gives None. read()
+#   with no size reads 256 (or what is left of 256) a port call until EAGAIN,
+#   None if nothing came. readinto() takes (buf) or (buf, n) only.
+# - py/ringbuf.h keeps one slot free: rp2 allocates rxbuf+1 and txbuf+1, so its
+#   rings hold rxbuf and txbuf bytes (256 by default, at least 32).
+# - ports/rp2/machine_uart.c: timeout is 0 and timeout_char at least
+#   13000 // baud + 1 ms (2 at 9600). Behind each ring a 32-byte hardware FIFO
+#   (UART_FIFO_SIZE_RX; the PL011's TX FIFO is as deep), and the transmitter
+#   holds the byte on the wire besides. write() puts in the ring what fits,
+#   moves the ring into the TX FIFO (uart_fill_tx_fifo), then for each byte
+#   left waits for ring room "while elapsed <= timeout" in whole ms of
+#   mp_hal_ticks_ms: `timeout` for the first, `timeout_char` after each byte put
+#   (so with timeout=0 it waits until the ms counter ticks: at most 1 ms).
+#   It returns the count put, or EAGAIN if none. Room comes only when bytes
+#   move to the FIFO: at a write, or at the TX interrupt, which the port turns
+#   on with the Pico SDK's uart_set_irq_enables(): at the PL011's lowest levels,
+#   RX at 4 bytes in the FIFO, TX down to 4 bytes. read() takes each byte from
+#   the ring; when the ring is empty and the RX FIFO is not, it moves up to 33
+#   bytes from FIFO to ring; else it waits as write() does (timeout, then
+#   timeout_char), EAGAIN if nothing came.
+#   any() moves up to 33 FIFO bytes into the ring (as far as it has room) and
+#   counts the ring: bytes left in the FIFO by a full ring are not counted. The
+#   RX interrupt (FIFO at 4 bytes, or 32 bit times after the last byte: the
+#   RX timeout) moves up to 23 bytes (UART_FIFO_TRIGGER_LEVEL_RX - 1). When ring
+#   and FIFO are full, a byte that comes is lost (the PL011 keeps its FIFO and
+#   loses the new byte). flush() waits up to (33 + ring size) * 26e6 / baud us.
+# - ports/esp32/machine_uart.c: txbuf and rxbuf 256, timeout and timeout_char 0
+#   by default; 128-byte hardware FIFOs. rx timeout = timeout_char //
+#   (12000 // baud + 1) characters; below 1 it sets the rx-full threshold to 1
+#   and the rx timeout to 1 character, else it keeps the driver's threshold of
+#   120. write() is ESP-IDF's uart_write_bytes() and read() uart_read_bytes()
+#   (1 byte with pdMS_TO_TICKS(timeout), then the rest with that of
+#   timeout_char: no wait at all by default; FreeRTOS ticks are 10 ms); any()
+#   is uart_get_buffered_data_len(). In that ESP-IDF driver (what the port
+#   calls, read for this model): the RX interrupt comes when the FIFO holds MORE
+#   than the threshold, or the line has been idle for the rx timeout (taken
+#   here as that many times 10 bit times), and moves
+#   the whole FIFO into the 256-byte ring (what any() counts); if the ring
+#   cannot take all of it, it keeps it aside and stops RX interrupts until a
+#   read has made room. A byte that finds the FIFO full overflows it, and the
+#   driver resets the FIFO: its 128 bytes are lost with the new one.
+#   uart_write_bytes() blocks with no time limit (portMAX_DELAY) until it has
+#   put all of it into the TX ring: a 12-byte descriptor, then chunks of at most
+#   ((txbuf / 2 rounded up to 4) - 8) / 2 = 60 bytes, each item taking its
+#   length rounded up to 4 plus an 8-byte header, and never wrapping round the
+#   ring's end (FreeRTOS's no-split ring buffer). The TX interrupt fills the
+#   FIFO from the ring when the FIFO holds fewer than 10 bytes.
+# - extmod/modtime.c, py/mpconfig.h: ticks wrap at MP_SMALL_INT_POSITIVE_MASK+1
+#   = 2**30 on a 32-bit port; ticks_diff(a, b) = ((a - b + 2**29) & (2**30 - 1))
+#   - 2**29; ticks_add() raises OverflowError("ticks interval overflow") unless
+#   -2**29 < delta < 2**29; sleep_ms(n < 0) and sleep_us(n <= 0) do nothing.
+#
+# Choices where the source leaves the model to choose:
+# - A stalled esp32 write would block for ever. Here it blocks for hang_ms
+#   (1000) of simulated time without room, then returns what it put (None if
+#   nothing), so that a test can go on and see what its driver makes of it;
+#   World(..., hang="raise") raises wire.Hang there instead.
+# - The simulated controller answers at the instant the last bit of a frame is
+#   in, and speaks unprompted (COMPLETE) on a whole ms: it is looked at every ms
+#   while a group runs, and at every catch-up. Its clock is the world's ms,
+#   unwrapped: it does its ticks arithmetic with the unix port's time module.
+# - Faults act on what the controller says after they are set: a reply already
+#   on its way is not cut, dropped or delayed. cut_reply() acts before drop().
+import asyncio
+
 import busservo_sim
+
+_yield = asyncio.sleep_ms  # taken now: a test may put async_sleep_ms in its place
 
 PORTS = ("rp2", "esp32")
 
-_PERIOD = 1 << 30
-_MASK = _PERIOD - 1
-_HALF = _PERIOD >> 1
+PERIOD = 1 << 30  # ticks period of a 32-bit port
+_MASK = PERIOD - 1
+_HALF = PERIOD >> 1
+_TICK_US = 10000  # a FreeRTOS tick on esp32 (100 Hz)
 
-# Command byte -> Length of the commands the controller takes (None: by count).
-_LENGTHS = {3: None, 6: 5, 7: 2, 11: 5, 15: 2, 20: None, 21: None}
+# Command byte -> Length of the commands the controller takes; (per, extra):
+# Length = per * count + extra, the count being the first parameter.
+_LENGTHS = {3: (3, 5), 6: 5, 7: 2, 11: 5, 15: 2, 20: (1, 3), 21: (1, 3)}
+METHODS = ("any", "read", "readinto", "write", "flush", "txdone")
+
+
+class Hang(Exception):
+    """A write a real board would never return from."""
 
 
 class Clock:
-    """MicroPython's time, as drivers use it, on simulated time. Every ticks
-    read costs cost_us, so that a busy-wait loop moves on."""
+    """MicroPython's time, as drivers use it, on simulated time: a drop-in for
+    `time` (ticks_ms, ticks_us, ticks_diff, ticks_add, sleep_ms, sleep_us). Each
+    ticks read costs cost_us. By default ticks_ms wraps 3 s in and ticks_us 1 s
+    in; start=None starts both at 0, start=(ms, us) where asked."""
 
-    def __init__(self, cost_us=1, us_wrap_s=1, ms_wrap_s=3):
-        self.now_ns = 0
-        self.cost_ns = cost_us * 1000
-        self._us0 = _PERIOD - us_wrap_s * 1000000  # ticks_us wraps us_wrap_s in
-        self._ms0 = _PERIOD - ms_wrap_s * 1000
-        self.world = None
-
-    @property
-    def now_us(self):
-        return self.now_ns // 1000
-
-    def _spend(self, ns):
-        self.now_ns += ns
-        if self.world:
-            self.world._update()
-
-    def ticks_us(self):
-        self._spend(self.cost_ns)
-        return (self.now_ns // 1000 + self._us0) & _MASK
+    def __init__(self, start="wrap", cost_us=1):
+        if start is None:
+            start = (0, 0)
+        elif start == "wrap":
+            start = (PERIOD - 3000, PERIOD - 1000000)
+        self._ms0, self._us0 = start
+        self.cost_us = cost_us
+        self.now_us = 0  # simulated time since the start, in us
 
     def ticks_ms(self):
-        self._spend(self.cost_ns)
-        return (self.now_ns // 1000000 + self._ms0) & _MASK
+        t = (self._ms0 + self.now_us // 1000) & _MASK
+        self.now_us += self.cost_us
+        return t
+
+    def ticks_us(self):
+        t = (self._us0 + self.now_us) & _MASK
+        self.now_us += self.cost_us
+        return t
+
+    ticks_cpu = ticks_us
 
     def ticks_diff(self, end, start):
         return ((end - start + _HALF) & _MASK) - _HALF
 
     def ticks_add(self, ticks, delta):
+        if not isinstance(delta, int):
+            raise TypeError("can't convert %s to int" % type(delta).__name__)
         if not -_HALF < delta < _HALF:
             raise OverflowError("ticks interval overflow")
         return (ticks + delta) & _MASK
 
-    def sleep_us(self, us):
-        self._spend(us * 1000)
-
     def sleep_ms(self, ms):
-        self._spend(ms * 1000000)
+        if ms >= 0:
+            self.now_us += ms * 1000
 
-    advance_us = sleep_us
-    advance_ms = sleep_ms
+    def sleep_us(self, us):
+        if us > 0:
+            self.now_us += us
+
+    def sleep(self, s):
+        if s > 0:
+            self.now_us += int(s * 1000000)
+
+    def advance_ms(self, ms):
+        self.now_us += ms * 1000
+
+    def advance_us(self, us):
+        self.now_us += us
+
+
+class _Ring:
+    # A byte FIFO of fixed capacity: a ring buffer or a hardware FIFO.
+    def __init__(self, capacity):
+        self.buf = bytearray(capacity)
+        self.cap = capacity
+        self.i = 0  # where the oldest byte is
+        self.n = 0  # how many bytes it holds
+
+    def put(self, b):
+        self.buf[(self.i + self.n) % self.cap] = b
+        self.n += 1
+
+    def get(self):
+        b = self.buf[self.i]
+        self.i = (self.i + 1) % self.cap
+        self.n -= 1
+        return b
+
+    def clear(self):
+        self.i = self.n = 0
+
+
+class _ItemRing:
+    # FreeRTOS's no-split ring buffer, as ESP-IDF's UART driver keeps its TX
+    # ring: items of (8-byte header + length rounded up to 4) that never wrap;
+    # freed oldest first. Each item is [position, data or None, bytes taken].
+    def __init__(self, size):
+        self.size = size
+        self.acq = 0  # where the next item goes
+        self.full = False
+        self.items = []
+
+    def fits(self, n):
+        cost = ((n + 3) & ~3) + 8
+        if not self.items:
+            return True
+        free = self.items[0][0]
+        if self.full:
+            return False
+        if free > self.acq:
+            return cost <= free - self.acq
+        return cost <= self.size - self.acq or cost <= free
+
+    def put(self, n, data):
+        cost = ((n + 3) & ~3) + 8
+        if self.size - self.acq < cost:  # the rest of the ring is dummy: wrap
+            self.acq = 0
+        self.items.append([self.acq, data, 0])
+        self.acq += cost
+        if self.size - self.acq < 8:
+            self.acq = 0
+        if self.acq == self.items[0][0]:
+            self.full = True
+
+    def pop(self):
+        self.items.pop(0)
+        self.full = False
+
+    def pending(self):
+        return sum(len(it[1]) - it[2] for it in self.items if it[1] is not None)
+
+
+class _Line:
+    # One direction of the wire: byte k of a burst (bytes back to back) has
+    # arrived at start + (k + 1) * 10_000_000 // baud us.
+    def __init__(self, baudrate):
+        self.baudrate = baudrate
+        self.start = 0
+        self.k = -1
+        self.end = -1  # when the last byte sent has arrived
+
+    def send(self, t):
+        if t == self.end:  # right behind the byte before
+            self.k += 1
+        else:
+            self.start = t
+            self.k = 0
+        self.end = self.start + (self.k + 1) * 10000000 // self.baudrate
+        return self.end
+
+    def after(self, n):
+        # When n more bytes, sent back to back behind the last one, have arrived.
+        return self.start + (self.k + 1 + n) * 10000000 // self.baudrate
+
+
+def _split(data):
+    # The frames (by their Length byte) of what the controller says.
+    out = []
+    i = 0
+    while i < len(data):
+        j = len(data)
+        if data[i] == 0x55 and i + 2 < len(data) and data[i + 1] == 0x55:
+            j = min(j, i + data[i + 2] + 2)
+        out.append(data[i:j])
+        i = j
+    return out
+
+
+def parse(data):
+    """(frames, garbage, rest) of bytes a controller received, strictly by the
+    protocol's lengths of the commands it takes; rest: the start of a frame
+    that may still be arriving."""
+    frames = []
+    garbage = bytearray()
+    i = 0
+    n = len(data)
+    while i < n:
+        rest = n - i
+        if data[i] != 0x55 or (rest > 1 and data[i + 1] != 0x55):
+            garbage.append(data[i])
+            i += 1
+            continue
+        if rest < 4:
+            break
+        length = data[i + 2]
+        want = _LENGTHS.get(data[i + 3])
+        if isinstance(want, tuple):
+            if rest < 5:
+                break
+            want = want[0] * data[i + 4] + want[1]
+        if want != length:
+            garbage.append(data[i])
+            i += 1
+            continue
+        if rest < length + 2:
+            break
+        frames.append(bytes(data[i : i + length + 2]))
+        i += length + 2
+    return frames, bytes(garbage), bytes(data[i:])
 
 
 class UART:
-    """A port's machine.UART, its transmit side draining onto the wire."""
+    """The board's machine.UART: any(), read([n]), readinto(buf[, n]), write(buf[,
+    off][, n]), flush(), txdone(), with the stream protocol's semantics and the
+    port's. Faults: fail(), during(), stall(). `overrun` counts received bytes
+    lost to a full receive side."""
 
-    def __init__(self, world, port, txbuf=256, rxbuf=256, timeout=0, timeout_char=0, call_us=5):
-        self.world = world
-        self.port = port
+    def __init__(self, world, timeout, hang_ms, hang):
+        self._w = world
         self.timeout = timeout
-        if port == "rp2":  # at least 13 bit times: 2 ms at 9600 baud, rounded up
-            self.timeout_char = max(timeout_char, 2)
-            self.threshold = self.idle_chars = 1
-        else:  # esp32: the rx full threshold and timeout MicroPython sets
-            self.timeout_char = timeout_char
-            self.idle_chars = max(1, timeout_char * 96 // 100)  # char times at 9600 baud
-            self.threshold = 1 if self.idle_chars == 1 and not timeout_char else 120
-        self.fifo = 32 if port == "rp2" else 128
-        self.tx_room = txbuf + self.fifo  # bytes written, not yet on the wire
-        self.rx_room = rxbuf + (self.fifo if port == "rp2" else 0)
-        self.call_ns = call_us * 1000
-        self.rx = bytearray()  # what any() counts
-        self.hidden = []  # esp32: (arrival ns, byte) in the FIFO, not yet in the buffer
-        self.overrun = 0  # bytes lost to a full receive side
-        self.stalled = False
-        self.asked = []  # (method, n asked, len(buf)) of every read, for tests
-        self._faults = []  # [method, skip, times, exc or None, callback, when]
+        self.hang_ms = hang_ms
+        self.hang = hang
+        self.overrun = 0
+        self._stalled = False
+        self._faults = {}  # method: [[skip, times, exc]]
+        self._hooks = {}  # method: [[skip, times, callback, when]]
 
     # Faults.
 
     def fail(self, method, exc, skip=0, times=1):
-        self._faults.append([method, skip, times, exc, None, "before"])
+        """The skip+1-th next call of method raises exc, times calls in a row;
+        a failing call takes and gives nothing (and during() does not count it)."""
+        self._check(method)
+        self._faults.setdefault(method, []).append([skip, times, exc])
 
     def during(self, method, callback, when="before", skip=0, times=1):
-        self._faults.append([method, skip, times, None, callback, when])
+        """callback() runs inside the skip+1-th next call of method (times calls
+        in a row): before it does its work, or after, before it returns."""
+        self._check(method)
+        if when not in ("before", "after"):
+            raise ValueError("when must be 'before' or 'after', got %r" % (when,))
+        self._hooks.setdefault(method, []).append([skip, times, callback, when])
 
     def stall(self, on=True):
-        self.world._update()
-        self.stalled = on
+        """A stuck transmitter: what is written stays in the UART (the byte on
+        the wire now still arrives) until stall(False)."""
+        w = self._w
+        w.sync()
+        self._stalled = on
         if not on:
-            self.world._restart_tx()
+            w._tx_kick()
+
+    @property
+    def stalled(self):
+        return self._stalled
+
+    def _check(self, method):
+        if method not in METHODS:
+            raise ValueError("method must be one of %s, got %r" % (METHODS, method))
+
+    @staticmethod
+    def _due(entries):
+        # Count one call against each entry; the entries that fire on it.
+        fired = []
+        for e in entries:
+            if e[0] > 0:
+                e[0] -= 1
+            elif e[1] > 0:
+                e[1] -= 1
+                fired.append(e)
+        entries[:] = [e for e in entries if e[1] > 0]
+        return fired
 
     def _enter(self, method):
-        self.world.clock._spend(self.call_ns)
-        after = None
-        for fault in self._faults:
-            if fault[0] == method and fault[2] > 0:
-                if fault[1] > 0:
-                    fault[1] -= 1
-                    continue
-                fault[2] -= 1
-                if fault[3] is not None:
-                    raise fault[3]
-                if fault[5] == "before":
-                    fault[4]()
-                else:
-                    after = fault[4]
+        w = self._w
+        w.clock.now_us += w.call_us
+        w.sync()
+        faults = self._faults.get(method)
+        if faults:
+            fired = self._due(faults)
+            if fired:
+                raise fired[0][2]
+        hooks = self._hooks.get(method)
+        if not hooks:
+            return None
+        after = []
+        for e in self._due(hooks):
+            if e[3] == "before":
+                e[2]()
+                w.sync()
+            else:
+                after.append(e[2])
         return after
+
+    def _leave(self, after):
+        if after:
+            for callback in after:
+                callback()
 
     # machine.UART's methods.
 
     def any(self):
         after = self._enter("any")
-        n = len(self.rx)
-        if after:
-            after()
+        n = self._any()
+        self._leave(after)
         return n
-
-    def readinto(self, buf, nbytes=None):
-        after = self._enter("readinto")
-        n = len(buf) if nbytes is None else min(nbytes, len(buf))
-        self.asked.append(("readinto", nbytes, len(buf)))
-        got = self._read(n)
-        for i in range(len(got)):
-            buf[i] = got[i]
-        if after:
-            after()
-        return len(got) or None
 
     def read(self, nbytes=None):
         after = self._enter("read")
-        got = self._read(len(self.rx) if nbytes is None else nbytes)
-        if after:
-            after()
-        return bytes(got) if got else None
-
-    def _read(self, n):
-        got = bytearray()
-        clock = self.world.clock
-        while len(got) < n:
-            if self.rx:
-                take = min(n - len(got), len(self.rx))
-                got += self.rx[:take]
-                self.rx = self.rx[take:]
-                continue
-            if self.port != "rp2":
-                break
-            # rp2: wait for the next byte, up to timeout (first) or timeout_char.
-            wait = self.timeout_char if got else self.timeout
-            start_ms = clock.now_ns // 1000000
-            while not self.rx and clock.now_ns // 1000000 - start_ms <= wait:
-                clock._spend(10000)
-            if not self.rx:
-                break
+        if nbytes is None or nbytes == -1:
+            got = self._readall()
+        elif nbytes < -1:
+            raise MemoryError
+        elif nbytes == 0:
+            got = b""
+        else:
+            buf = bytearray(nbytes)
+            n = self._io_read(buf, 0, nbytes)
+            got = None if n is None else bytes(buf[:n])
+        self._leave(after)
         return got
 
-    def write(self, buf, a=None, b=None):
+    def readinto(self, buf, nbytes=None):
+        if isinstance(buf, (bytes, str)):
+            raise TypeError("object with buffer protocol required")
+        after = self._enter("readinto")
+        n = len(buf)
+        if nbytes is not None and 0 <= nbytes < n:
+            n = nbytes
+        got = self._io_read(buf, 0, n) if n else 0
+        self._leave(after)
+        return got
+
+    def write(self, buf, off=None, nbytes=None):
+        if isinstance(buf, str):
+            buf = buf.encode()
         after = self._enter("write")
-        if b is None:
-            off, n = 0, len(buf) if a is None else min(a, len(buf))
+        size = len(buf)
+        if nbytes is None:  # write(buf) or write(buf, n)
+            start = 0
+            if off is not None and 0 <= off < size:
+                size = off
+        else:  # write(buf, off, n)
+            start = off if 0 <= off <= size else size
+            size -= start
+            if 0 <= nbytes < size:
+                size = nbytes
+        n = self._io_write(memoryview(buf)[start : start + size]) if size else 0
+        self._leave(after)
+        return n
+
+    def flush(self):
+        after = self._enter("flush")
+        w = self._w
+        if not w._wait(self._txdone, w._t + self._flush_us()):
+            raise OSError(110)  # ETIMEDOUT
+        self._leave(after)
+
+    def txdone(self):
+        after = self._enter("txdone")
+        done = self._txdone()
+        self._leave(after)
+        return done
+
+    def _readall(self):
+        got = bytearray()
+        buf = bytearray(256)
+        ask = 256
+        while True:
+            n = self._io_read(buf, 0, ask)
+            if n is None:
+                return bytes(got) if got else None
+            got += buf[:n]
+            ask = ask - n if n < ask else 256
+
+    def _txdone(self):
+        return not self._tx_pending() and not self._w._tx_busy
+
+
+class _RP2(UART):
+    FIFO = 32
+
+    def __init__(self, world, timeout, timeout_char, txbuf, rxbuf, hang_ms, hang):
+        UART.__init__(self, world, timeout, hang_ms, hang)
+        baud = world.baudrate
+        self.timeout_char = max(timeout_char, 13000 // baud + 1)
+        rxbuf = 256 if rxbuf is None else rxbuf
+        txbuf = 256 if txbuf is None else txbuf
+        if max(rxbuf, txbuf) > 32766:
+            raise ValueError("rxbuf and txbuf are at most 32766")
+        self._rx_ring = _Ring(max(rxbuf, 32))
+        self._rx_fifo = _Ring(32)
+        self._tx_ring = _Ring(max(txbuf, 32))
+        self._tx_fifo = _Ring(32)
+        self._rt_us = 32 * 1000000 // baud  # the RX timeout: 32 bit times
+        self._rt_at = None
+
+    def _any(self):
+        self._drain_rx(33)
+        return self._rx_ring.n
+
+    def _drain_rx(self, most):
+        fifo, ring = self._rx_fifo, self._rx_ring
+        while fifo.n and ring.n < ring.cap and most > 0:
+            ring.put(fifo.get())
+            most -= 1
+
+    def _rx_ready(self):
+        return self._rx_ring.n or self._rx_fifo.n
+
+    def _io_read(self, buf, off, n):
+        w = self._w
+        ring = self._rx_ring
+        start = w._t // 1000
+        timeout = self.timeout
+        for i in range(n):
+            while not ring.n:
+                if self._rx_fifo.n:
+                    self._drain_rx(33)
+                    break
+                if not w._wait(self._rx_ready, (start + timeout + 1) * 1000):
+                    return i or None
+            buf[off + i] = ring.get()
+            start = w._t // 1000
+            timeout = self.timeout_char
+        return n
+
+    def _tx_room(self):
+        return self._tx_ring.n < self._tx_ring.cap
+
+    def _io_write(self, mv):
+        w = self._w
+        ring = self._tx_ring
+        n = len(mv)
+        i = 0
+        start = w._t // 1000
+        timeout = self.timeout
+        while i < n and ring.n < ring.cap:
+            ring.put(mv[i])
+            i += 1
+        self._fill_tx()
+        while i < n:
+            if not w._wait(self._tx_room, (start + timeout + 1) * 1000):
+                return i or None
+            ring.put(mv[i])
+            i += 1
+            start = w._t // 1000
+            timeout = self.timeout_char
+            self._fill_tx()
+        return n
+
+    def _fill_tx(self):
+        fifo, ring = self._tx_fifo, self._tx_ring
+        while fifo.n < 32 and ring.n:
+            fifo.put(ring.get())
+        self._w._tx_kick()
+
+    def _tx_take(self):
+        # The transmitter takes the next byte from the FIFO; down to 4 bytes,
+        # the TX interrupt refills the FIFO from the ring.
+        fifo = self._tx_fifo
+        if not fifo.n:
+            return -1
+        b = fifo.get()
+        if fifo.n <= 4:
+            ring = self._tx_ring
+            while fifo.n < 32 and ring.n:
+                fifo.put(ring.get())
+        return b
+
+    def _tx_pending(self):
+        return self._tx_ring.n + self._tx_fifo.n
+
+    def _rx_arrive(self, t, b):
+        fifo = self._rx_fifo
+        if fifo.n == 32:  # overrun: the FIFO keeps its bytes, the new one is lost
+            self.overrun += 1
+            return
+        fifo.put(b)
+        self._rt_at = t + self._rt_us
+        if fifo.n >= 4:  # the RX interrupt
+            self._drain_rx(23)
+
+    def _rx_start(self):
+        self._rt_at = None  # a byte is coming: the line is not idle
+
+    def _rx_timer(self):
+        return self._rt_at if self._rx_fifo.n else None
+
+    def _rx_timer_fire(self, t):
+        if self._rt_at is not None and self._rt_at <= t:
+            self._rt_at = None
+            self._drain_rx(23)
+
+    def _flush_us(self):
+        return (33 + self._tx_ring.cap + 1) * 26000000 // self._w.baudrate
+
+
+class _ESP32(UART):
+    FIFO = 128
+
+    def __init__(self, world, timeout, timeout_char, txbuf, rxbuf, hang_ms, hang):
+        UART.__init__(self, world, timeout, hang_ms, hang)
+        baud = world.baudrate
+        self.timeout_char = timeout_char
+        rxbuf = 256 if rxbuf is None else rxbuf
+        txbuf = 256 if txbuf is None else txbuf
+        if min(rxbuf, txbuf) <= 128:
+            raise ValueError("rxbuf and txbuf must be more than the 128-byte FIFO")
+        chars = timeout_char // (12000 // baud + 1)
+        self._threshold = 1 if chars < 1 else 120
+        self._tout_us = max(chars, 1) * 10000000 // baud
+        self._tout_at = None
+        self._rx_fifo = _Ring(128)
+        self._rx_ring = _Ring(rxbuf)
+        self._stash = None  # what the RX interrupt took and the ring could not
+        self._tx_fifo = _Ring(128)
+        self._tx_ring = _ItemRing(txbuf)
+        self._txbuf = txbuf
+        self._chunk = ((((txbuf // 2) + 3) & ~3) - 8) // 2
+
+    def _any(self):
+        return self._rx_ring.n
+
+    # Receiving.
+
+    def _rx_arrive(self, t, b):
+        fifo = self._rx_fifo
+        if fifo.n == 128:  # RXFIFO_OVF: the driver resets the FIFO
+            self.overrun += fifo.n + 1
+            fifo.clear()
+            return
+        fifo.put(b)
+        self._tout_at = t + self._tout_us
+        if self._stash is None and fifo.n > self._threshold:
+            self._isr_rx()
+
+    def _rx_start(self):
+        self._tout_at = None  # a byte is coming: the line is not idle
+
+    def _rx_timer(self):
+        if self._stash is None and self._rx_fifo.n:
+            return self._tout_at
+        return None
+
+    def _rx_timer_fire(self, t):
+        if self._tout_at is not None and self._tout_at <= t:
+            self._isr_rx()
+
+    def _isr_rx(self):
+        fifo, ring = self._rx_fifo, self._rx_ring
+        self._tout_at = None
+        data = bytearray(fifo.n)
+        for i in range(len(data)):
+            data[i] = fifo.get()
+        if ring.cap - ring.n >= len(data):
+            for b in data:
+                ring.put(b)
         else:
-            off = min(a, len(buf))
-            n = min(b, len(buf) - off)
-        data = bytes(buf[off : off + n])
-        world = self.world
-        clock = world.clock
-        put = self._put(data)
-        if self.port == "esp32":
-            while put < n and not self.stalled:  # blocks until all is in its buffer
-                clock._spend(10000)
-                put += self._put(data[put:])
-            if put < n:  # stalled: its driver would block for ever; a test gives up here
-                clock._spend(1000000000)
-        else:
-            start_ms = clock.now_ns // 1000000
-            wait = self.timeout
-            while put < n:
-                while world.tx_pending() >= self.tx_room:
-                    if clock.now_ns // 1000000 - start_ms > wait:
-                        break
-                    clock._spend(10000)
-                else:
-                    put += self._put(data[put : put + 1])
-                    start_ms = clock.now_ns // 1000000
-                    wait = self.timeout_char
+            self._stash = data
+
+    def _check_buf_full(self):
+        # After a read: the stash into the ring, if it fits now; RX interrupts
+        # on again, and one that was waiting comes at once.
+        stash, ring = self._stash, self._rx_ring
+        if stash is None or ring.cap - ring.n < len(stash):
+            return False
+        for b in stash:
+            ring.put(b)
+        self._stash = None
+        fifo = self._rx_fifo
+        due = self._tout_at is not None and self._tout_at <= self._w._t
+        if fifo.n and (fifo.n > self._threshold or due):
+            self._isr_rx()
+        return True
+
+    def _ring_has(self):
+        return self._rx_ring.n
+
+    def _io_read(self, buf, off, n):
+        got = self._read_bytes(buf, off, 1, self.timeout // 10)
+        if n > 1 and got:
+            got += self._read_bytes(buf, off + 1, n - 1, self.timeout_char // 10)
+        return got or None
+
+    def _read_bytes(self, buf, off, length, ticks):
+        w = self._w
+        ring = self._rx_ring
+        copied = 0
+        while length:
+            if not ring.n and ticks:
+                w._wait(self._ring_has, (w._t // _TICK_US + ticks) * _TICK_US)
+            if not ring.n:
+                if self._check_buf_full():
                     continue
                 break
-        if after:
-            after()
-        return put or (None if n else 0)
+            k = min(length, ring.n)
+            for _ in range(k):
+                buf[off + copied] = ring.get()
+                copied += 1
+            length -= k
+            self._check_buf_full()
+        return copied
 
-    def _put(self, data):
-        world = self.world
-        world._update()
-        room = self.tx_room - world.tx_pending()
-        take = data[: max(0, room)]
-        world._transmit(take)
-        return len(take)
+    # Sending.
+
+    def _io_write(self, mv):
+        n = len(mv)
+        if not self._put_item(12, None):  # the descriptor
+            return self._hung(0)
+        off = 0
+        while off < n:
+            k = min(self._chunk, n - off)
+            if not self._put_item(k, bytes(mv[off : off + k])):
+                return self._hung(off)
+            off += k
+            self._isr_tx()
+            self._w._tx_kick()
+        return n
+
+    def _put_item(self, size, data):
+        ring = self._tx_ring
+        w = self._w
+        if not ring.fits(size):
+
+            def room():
+                return ring.fits(size)
+
+            if not w._wait(room, w._t + self.hang_ms * 1000):
+                return False
+        ring.put(size, data)
+        return True
+
+    def _hung(self, put):
+        if self.hang == "raise":
+            raise Hang("an esp32 write() would block for ever here (%d bytes in)" % put)
+        return put or None
+
+    def _isr_tx(self):
+        fifo = self._tx_fifo
+        if fifo.n >= 10:
+            return
+        ring = self._tx_ring
+        items = ring.items
+        while fifo.n < 128 and items:
+            item = items[0]
+            data = item[1]
+            if data is None:
+                ring.pop()
+                continue
+            k = item[2]
+            while k < len(data) and fifo.n < 128:
+                fifo.put(data[k])
+                k += 1
+            item[2] = k
+            if k == len(data):
+                ring.pop()
+
+    def _tx_take(self):
+        fifo = self._tx_fifo
+        if not fifo.n:
+            return -1
+        b = fifo.get()
+        if fifo.n < 10:
+            self._isr_tx()
+        return b
+
+    def _tx_pending(self):
+        return self._tx_ring.pending() + self._tx_fifo.n
+
+    def _flush_us(self):
+        return (3 + self._txbuf) * 13000 * 2 // self._w.baudrate * _TICK_US
 
 
 class World:
-    def __init__(self, port="rp2", baudrate=9600, call_us=5, cost_us=1, **uart):
-        self.port = port
-        self.clock = Clock(cost_us)
-        self.byte_ns = 10 * 1000000000 // baudrate
-        self.uart = UART(self, port, call_us=call_us, **uart)
-        self._t = 0  # the time the controller lives at while it is fed
-        # The simulator does its ticks arithmetic with its module's time: the world's.
-        busservo_sim.time = self.clock
-        self.sim = busservo_sim.SimController(ticks_ms=self._sim_ticks_ms)
-        self._tx = bytearray()  # board -> controller, not yet arrived
-        self._tx_end = 0  # when the byte on the wire now has arrived
-        self._line = []  # controller -> board: [arrival ns, byte], in order
-        self._line_free = 0  # when the return line is free
-        self._received = bytearray()
-        self._drop = []  # [skip, n]
-        self._cut = None
-        self._late = []  # [ms, count]
-        self.clock.world = self
+    """A board's UART (w.uart), the wire, and a SimController (w.sim) at its far
+    end, all on w.clock. Keyword arguments beyond the UART's go to the
+    SimController (groups=, battery=)."""
 
-    def _sim_ticks_ms(self):
-        return (self._t // 1000000 + self.clock._ms0) & _MASK
+    def __init__(
+        self,
+        port="rp2",
+        baudrate=9600,
+        call_us=5,
+        cost_us=1,
+        start="wrap",
+        timeout=0,
+        timeout_char=0,
+        txbuf=None,
+        rxbuf=None,
+        hang_ms=1000,
+        hang="return",
+        **sim,
+    ):
+        if port not in PORTS:
+            raise ValueError("port must be one of %s, got %r" % (PORTS, port))
+        self.port = port
+        self.baudrate = baudrate
+        self.call_us = call_us
+        self.byte_us = 10000000 // baudrate  # (a byte takes this or 1 us more)
+        self.clock = Clock(start, cost_us)
+        self._t = 0  # how far the wire has been brought
+        self._tx_line = _Line(baudrate)
+        self._tx_busy = False
+        self._tx_end = 0
+        self._tx_byte = 0
+        self._rx_line = _Line(baudrate)
+        self._rx_busy = False
+        self._rx_end = 0
+        self._rx_byte = 0
+        self._rx_queue = []  # [not before, bytearray, next index, noise?], in order
+        self._received = bytearray()
+        self.sent_at = []  # when each byte the controller received had arrived
+        self.arrived = []  # (us, byte) of each byte that reached the board's pin
+        self._drops = []  # [skip, n]
+        self._cuts = []  # keep, one a frame
+        self._lates = []  # [ms, count]
+        self._one = bytearray(1)
+        self._sim = busservo_sim.SimController(ticks_ms=self._sim_ms, **sim)
+        self._sim_active = False  # a group runs: look at the controller every ms
+        self._poll_at = 0
+        cls = _RP2 if port == "rp2" else _ESP32
+        self.uart = cls(self, timeout, timeout_char, txbuf, rxbuf, hang_ms, hang)
+
+    @property
+    def sim(self):
+        """The controller, with the wire brought up to now."""
+        self.sync()
+        return self._sim
+
+    def _sim_ms(self):
+        # The controller's clock: the world's ms, unwrapped (the simulator does
+        # its ticks arithmetic with the unix port's time, whose period is 2**62).
+        return self.clock._ms0 + self._t // 1000
+
+    # Observations.
+
+    def received(self):
+        """Every byte the controller has received."""
+        self.sync()
+        return bytes(self._received)
+
+    def frames(self):
+        """The whole frames the controller received, by the protocol's lengths."""
+        self.sync()
+        return parse(self._received)[0]
+
+    @property
+    def garbled(self):
+        """How many bytes the controller received formed no frame."""
+        self.sync()
+        return len(parse(self._received)[1])
+
+    def garbage(self):
+        """The bytes the controller received that formed no frame."""
+        self.sync()
+        return parse(self._received)[1]
+
+    def tx_backlog_us(self):
+        """How long until the board's transmit side is empty (None: stalled)."""
+        self.sync()
+        pending = self.uart._tx_pending()
+        if not self._tx_busy:
+            return None if pending else 0
+        if pending and self.uart._stalled:
+            return None
+        return self._tx_line.after(pending) - self._t
+
+    def tx_pending(self):
+        """How many bytes written have not arrived yet (the one on the wire too)."""
+        self.sync()
+        return self.uart._tx_pending() + self._tx_busy
+
+    @property
+    def overrun(self):
+        self.sync()
+        return self.uart.overrun
 
     # Faults on the line from the controller.
 
     def noise(self, data):
-        """These bytes go onto the line to the board next, at the baud rate."""
-        self._update()
-        self._send_back(bytes(data), self.clock.now_ns, raw=True)
+        """These bytes go onto the line to the board next (behind the byte on
+        it now, before what the controller says next), at the baud rate."""
+        self.sync()
+        if data:
+            q = self._rx_queue
+            i = 0
+            while i < len(q) and q[i][3]:  # behind the noise before it
+                i += 1
+            q.insert(i, [self._t, bytearray(data), 0, True])
+            self._rx_kick(self._t)
 
     def drop(self, n=1, skip=0):
-        self._drop.append([skip, n])
+        """Of the bytes the controller says from now, skip skip, then lose n."""
+        self.sync()
+        self._drops.append([skip, n])
 
     def cut_reply(self, keep):
-        self._cut = keep
+        """The next frame the controller says loses all but its first keep bytes."""
+        self.sync()
+        self._cuts.append(keep)
 
     def late(self, ms, count=1):
-        self._late.append([ms, count])
+        """The next count frames the controller says go out ms later."""
+        self.sync()
+        self._lates.append([ms, count])
 
-    # What the controller received.
+    # Time.
 
-    def received(self):
-        self._update()
-        return bytes(self._received)
+    def sync(self):
+        """Bring the wire up to the clock."""
+        self._run_to(self.clock.now_us)
 
-    def frames(self):
-        """The whole frames the controller received, by the protocol's lengths;
-        bytes that formed none are counted in garbled."""
-        data = self.received()
-        frames = []
-        garbled = 0
-        i = 0
-        while i < len(data):
-            if data[i : i + 2] != b"\x55\x55" or len(data) - i < 4:
-                garbled += 1
-                i += 1
-                continue
-            length, cmd = data[i + 2], data[i + 3]
-            want = _LENGTHS.get(cmd, -1)
-            if want is None:
-                if len(data) - i < 5:
-                    garbled += len(data) - i
-                    break
-                want = 3 * data[i + 4] + 5 if cmd == 3 else data[i + 4] + 3
-            if want != length or len(data) - i < length + 2:
-                garbled += 1
-                i += 1
-                continue
-            frames.append(data[i : i + length + 2])
-            i += length + 2
-        self.garbled = garbled
-        return frames
+    def run_ms(self, ms):
+        """Let ms pass, and bring the wire up to it."""
+        self.clock.sleep_ms(ms)
+        self.sync()
 
-    @property
-    def garbled(self):
-        self.frames()
-        return self._garbled
-
-    @garbled.setter
-    def garbled(self, value):
-        self._garbled = value
-
-    def tx_backlog_us(self):
-        self._update()
-        if not self._tx:
-            return 0
-        return (self._tx_end + (len(self._tx) - 1) * self.byte_ns - self.clock.now_ns) // 1000
+    async def async_sleep_ms(self, ms):
+        """asyncio.sleep_ms for the world: the clock moves, then the other tasks run."""
+        self.clock.sleep_ms(ms)
+        await _yield(0)
 
     # The wire.
 
-    def tx_pending(self):
-        return len(self._tx)
+    def _wait(self, cond, deadline):
+        # A UART call waits: the clock moves event by event until cond() or the
+        # deadline. True if cond().
+        clock = self.clock
+        while not cond():
+            t = self._next()
+            if t is None or t > deadline:
+                if deadline > clock.now_us:
+                    clock.now_us = deadline
+                self._run_to(clock.now_us)
+                return bool(cond())
+            if t > clock.now_us:
+                clock.now_us = t
+            self._run_to(t)
+        return True
 
-    def _transmit(self, data):
-        if not data:
+    def _next(self):
+        t = None
+        if self._tx_busy:
+            t = self._tx_end
+        if self._rx_busy:
+            if t is None or self._rx_end < t:
+                t = self._rx_end
+        elif self._rx_queue:
+            nb = max(self._rx_queue[0][0], self._t)
+            if t is None or nb < t:
+                t = nb
+        u = self.uart._rx_timer()
+        if u is not None:
+            u = max(u, self._t)
+            if t is None or u < t:
+                t = u
+        if self._sim_active and (t is None or self._poll_at < t):
+            t = self._poll_at
+        return t
+
+    def _run_to(self, target):
+        self._collect(self._t)  # what it was told off the wire (w.sim.write()) says
+        while True:
+            t = self._next()
+            if t is None or t > target:
+                break
+            self._t = t
+            self._step(t)
+        if target > self._t:
+            self._t = target
+
+    def _step(self, t):
+        if self._tx_busy and self._tx_end == t:
+            self._tx_done(t)
+        if self._rx_busy and self._rx_end == t:
+            self._rx_done(t)
+        self._rx_kick(t)
+        u = self.uart._rx_timer()
+        if u is not None and u <= t:
+            self.uart._rx_timer_fire(t)
+        if self._sim_active and self._poll_at <= t:
+            self._poll_at = (t // 1000 + 1) * 1000
+            self._collect(t)
+
+    def _tx_kick(self):
+        # The transmitter starts the next byte, if idle and it has one.
+        if self._tx_busy or self.uart._stalled:
             return
-        if not self._tx and not self.uart.stalled:
-            self._tx_end = self.clock.now_ns + self.byte_ns
-        self._tx += data
+        b = self.uart._tx_take()
+        if b >= 0:
+            self._tx_byte = b
+            self._tx_busy = True
+            self._tx_end = self._tx_line.send(self._t)
 
-    def _restart_tx(self):
-        if self._tx:
-            self._tx_end = self.clock.now_ns + self.byte_ns
+    def _tx_done(self, t):
+        # A byte's last bit is in: the controller has it.
+        self._tx_busy = False
+        b = self._tx_byte
+        self._received.append(b)
+        self.sent_at.append(t)
+        self._one[0] = b
+        self._sim.write(self._one, 1)
+        self._collect(t)
+        self._tx_kick()
 
-    def _update(self):
-        now = self.clock.now_ns
-        # Board -> controller: each byte is the controller's when its last bit is in.
-        while self._tx and not self.uart.stalled and self._tx_end <= now:
-            self._t = self._tx_end
-            byte = self._tx[0]
-            self._tx = self._tx[1:]
-            self._received.append(byte)
-            self.sim.write(bytes((byte,)))
-            self._answer(self._t)
-            if self._tx:
-                self._tx_end += self.byte_ns
-        # What the controller says by itself (COMPLETE when a group ends).
-        self._t = now
-        self._answer(now)
-        # Controller -> board.
-        line = self._line
-        uart = self.uart
-        while line and line[0][0] <= now:
-            t, byte = line.pop(0)
-            if uart.port == "esp32":
-                uart.hidden.append((t, byte))
-            elif len(uart.rx) < uart.rx_room:
-                uart.rx.append(byte)
-            else:
-                uart.overrun += 1
-        if uart.port == "esp32" and uart.hidden:
-            idle = now - uart.hidden[-1][0] >= uart.idle_chars * self.byte_ns
-            if len(uart.hidden) >= uart.threshold or idle:
-                for _, byte in uart.hidden:
-                    if len(uart.rx) < uart.rx_room:
-                        uart.rx.append(byte)
-                    else:
-                        uart.overrun += 1
-                uart.hidden = []
-            elif len(uart.hidden) > uart.fifo:
-                uart.overrun += len(uart.hidden)
-                uart.hidden = []
+    def _collect(self, t):
+        # What the controller says goes onto the line to the board.
+        sim = self._sim
+        if sim.any():
+            self._said(t, sim.read())
+        try:
+            active = sim.running is not None
+        except AttributeError:  # a controller that does not say: look every ms
+            active = True
+        if active and not self._sim_active:
+            self._poll_at = (t // 1000 + 1) * 1000
+        self._sim_active = active
 
-    def _answer(self, t):
-        data = self.sim.read()
-        if data:
-            self._send_back(data, t)
+    def _said(self, t, data):
+        for frame in _split(data):
+            if self._cuts:
+                frame = frame[: self._cuts.pop(0)]
+            at = t
+            if self._lates:
+                late = self._lates[0]
+                at += late[0] * 1000
+                late[1] -= 1
+                if late[1] <= 0:
+                    self._lates.pop(0)
+            if self._drops:
+                frame = self._drop(frame)
+            if frame:
+                self._rx_queue.append([at, bytearray(frame), 0, False])
+        self._rx_kick(t)
 
-    def _send_back(self, data, t, raw=False):
-        if not raw:
-            if self._cut is not None:
-                data = data[: self._cut]
-                self._cut = None
-            if self._late:
-                t += self._late[0][0] * 1000000
-                self._late[0][1] -= 1
-                if not self._late[0][1]:
-                    self._late.pop(0)
-        start = max(t, self._line_free)
-        for byte in data:
-            if not raw and self._drop:
-                d = self._drop[0]
+    def _drop(self, frame):
+        kept = bytearray()
+        for b in frame:
+            lost = False
+            for d in self._drops:
                 if d[0] > 0:
                     d[0] -= 1
-                else:
+                elif d[1] > 0:
                     d[1] -= 1
-                    if not d[1]:
-                        self._drop.pop(0)
-                    continue
-            start += self.byte_ns
-            self._line.append([start, byte])
-        self._line_free = start
+                    lost = True
+            if not lost:
+                kept.append(b)
+        self._drops = [d for d in self._drops if d[1] > 0]
+        return kept
+
+    def _rx_kick(self, t):
+        # The line to the board starts its next byte, if idle and one is due.
+        if self._rx_busy or not self._rx_queue:
+            return
+        seg = self._rx_queue[0]
+        if seg[0] > t:
+            return
+        data = seg[1]
+        k = seg[2]
+        self._rx_byte = data[k]
+        if k + 1 == len(data):
+            self._rx_queue.pop(0)
+        else:
+            seg[2] = k + 1
+        self._rx_busy = True
+        self._rx_end = self._rx_line.send(t)
+        self.uart._rx_start()
+
+    def _rx_done(self, t):
+        self._rx_busy = False
+        b = self._rx_byte
+        self.arrived.append((t, b))
+        self.uart._rx_arrive(t, b)
