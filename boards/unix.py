@@ -8,6 +8,11 @@
 #
 # Wiring for an adapter: its TX to the controller's RX, its RX to the
 # controller's TX, GND to GND; the servos take their power from the controller.
+#
+# An unplugged adapter raises OSError(EIO) from the next call. But a process
+# that leads a session with no terminal (a systemd service, setsid) takes the
+# device as its terminal (MicroPython's open() has no O_NOCTTY), and an unplug
+# then kills it with SIGHUP: start such a one under nohup.
 import errno
 import select
 import termios
@@ -35,18 +40,21 @@ class SerialUART:
             self._file = open(path, "r+b")
         except OSError as e:
             raise OSError(e.args[0], "cannot open serial device %s" % path)
+        attrs = None
         try:
             fd = self._file.fileno()
             termios.setraw(fd)  # no echo, no line editing, 8 bits through untouched
             attrs = termios.tcgetattr(fd)
+            attrs[4] = attrs[5] = _BAUDRATES[baudrate]
+            # Reads return at once with what has arrived, as machine.UART's do.
+            attrs[6][_VMIN] = 0
+            attrs[6][_VTIME] = 0
+            termios.tcsetattr(fd, termios.TCSANOW, attrs)
         except OSError as e:
-            self._file.close()  # not a tty: give the descriptor back
-            raise OSError(e.args[0], "%s is not a serial device" % path)
-        attrs[4] = attrs[5] = _BAUDRATES[baudrate]
-        # Reads return at once with what has arrived, as machine.UART's do.
-        attrs[6][_VMIN] = 0
-        attrs[6][_VTIME] = 0
-        termios.tcsetattr(fd, termios.TCSANOW, attrs)
+            self._file.close()  # give the descriptor back
+            if attrs is None:  # termios refused it: no tty
+                raise OSError(e.args[0], "%s is not a serial device" % path)
+            raise OSError(e.args[0], "%s: cannot set %d baud" % (path, baudrate))
         self._in = select.poll()
         self._in.register(self._file, select.POLLIN)
         self._out = select.poll()
@@ -55,20 +63,31 @@ class SerialUART:
         self._start = 0
         self._end = 0
 
+    def _raise_hung_up(self):
+        # The device has gone (an unplugged adapter, a pty whose other side
+        # closed). A hung-up tty stays so: it reads nothing, fails writes with
+        # EIO and polls POLLHUP for ever, so each call raises from then on.
+        raise OSError(errno.EIO, "%s: the serial device hung up" % self.path)
+
     def _ready(self, poller):
         # Whether the device is ready (poll with no wait); a hang-up raises.
         for _, event in poller.poll(0):
             if event & (select.POLLHUP | select.POLLERR):
-                raise OSError(errno.EIO, "%s: the serial device hung up" % self.path)
+                self._raise_hung_up()
             return True
         return False
 
     def any(self):
         """Bytes waiting to be read."""
         if self._start == self._end and self._ready(self._in):
-            n = self._file.readinto(self._buf)
+            try:
+                n = self._file.readinto(self._buf)
+            except OSError as e:
+                if e.args[0] != errno.EIO:
+                    raise
+                n = 0
             if not n:  # ready, yet nothing: the other end has gone
-                raise OSError(errno.EIO, "%s: the serial device hung up" % self.path)
+                self._raise_hung_up()
             self._start = 0
             self._end = n
         return self._end - self._start
@@ -97,17 +116,27 @@ class SerialUART:
     def write(self, buf, off=None, nbytes=None):
         """As machine.UART.write() on a port with timeout=0: what the device
         takes now (the stream protocol's write(buf), write(buf, n) and
-        write(buf, off, n)), or None if it takes nothing. It never waits: a
-        device reports itself writable with fewer than 256 bytes waiting, and
-        this writes at most 256 at a time."""
+        write(buf, off, n)), or None if it takes nothing."""
+        # The unix port can open no file O_NONBLOCK (no os.open, fcntl or ffi),
+        # and its file write() goes on until all is written. So: only when poll()
+        # says the device is writable, and at most 256 bytes, which Linux then
+        # has room for (POLLOUT: under 256 bytes queued; a pty's room comes in
+        # 256-byte steps, a USB adapter's in kilobytes).
         if nbytes is None:
             nbytes = len(buf) if off is None else off
             off = 0
         off = min(off, len(buf))
         nbytes = min(nbytes, len(buf) - off, 256)
+        if nbytes <= 0:
+            return 0  # as the stream protocol: nothing asked, nothing written
         if not self._ready(self._out):
             return None
-        return self._file.write(buf, off, nbytes) or None
+        try:
+            return self._file.write(buf, off, nbytes) or None
+        except OSError as e:
+            if e.args[0] != errno.EIO:
+                raise
+        self._raise_hung_up()
 
     def close(self):
         self._file.close()

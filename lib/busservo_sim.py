@@ -10,7 +10,9 @@
 #   position read mid-move gives the value in between (servos start at 500);
 # - action groups (`groups`, {group: ms per run}) run `times` times or forever,
 #   sending RUN as they start, COMPLETE as they end, STOP when stopped (by a STOP
-#   command, or by a RUN of another group);
+#   command, or by a RUN of another group); a run longer than the ticks can span
+#   (65535 times at 1 %: months) ends on time too, if anything calls the sim at
+#   least every 3 days;
 # - ACTION_GROUP_SPEED scales a group's durations (ALL_GROUPS: every group);
 #   power_cycle() forgets it, as the controller does at power-off;
 # - unload lets servos go limp where they are (`limp`) until they are moved;
@@ -37,6 +39,9 @@ from busservo import (
 SIM_SILENT = 0xF0  # the simulator's own command: Prm 1 = 1 silent, 0 talking
 GROUPS = {0: 1000, 1: 500, 2: 2000, 8: 1500}  # default action groups, ms per run
 CENTER = 500  # where a servo starts
+# ms a run's end moves at a time: ticks_add() refuses half the ticks' period
+# (2**29 ms on most boards, 2**28 where small ints have 30 bits).
+_SPAN = 1 << 27
 
 
 class SimController:
@@ -55,7 +60,7 @@ class SimController:
     def power_cycle(self):
         """Power off and on: groups stop (silently) and speeds are forgotten."""
         self._speed = {}  # group: percent
-        self._running = None  # (group, times, end ticks, or None for forever)
+        self._running = None  # (group, times, end ticks or None for forever, ms after end)
         self._in = bytearray()
         self._out = bytearray()
 
@@ -118,11 +123,17 @@ class SimController:
             self._out += bytes((0x55, 0x55, len(params) + 2, cmd) + params)
 
     def _tick(self):
-        # An action group that has run its course completes.
+        # An action group that has run its course completes. A long run's end
+        # moves _SPAN at a time, so no ticks span is more than ticks_add() takes.
         run = self._running
-        if run and run[2] is not None and time.ticks_diff(self._ticks_ms(), run[2]) >= 0:
-            self._running = None
-            self._send(CMD_ACTION_GROUP_COMPLETE, run[0], run[1] & 0xFF, run[1] >> 8)
+        while run and run[2] is not None and time.ticks_diff(self._ticks_ms(), run[2]) >= 0:
+            group, times, end, rest = run
+            if not rest:
+                self._running = None
+                self._send(CMD_ACTION_GROUP_COMPLETE, group, times & 0xFF, times >> 8)
+                return
+            step = min(rest, _SPAN)
+            run = self._running = (group, times, time.ticks_add(end, step), rest - step)
 
     def _decode(self):
         d = self._in
@@ -171,14 +182,12 @@ class SimController:
             if self.running is not None:
                 self._running = None
                 self._send(CMD_ACTION_GROUP_STOP)
-            end = None
+            end = rest = None  # forever
             if times:
-                run_ms = self.groups[group] * 100 // self.speed(group)
-                try:
-                    end = time.ticks_add(now, times * run_ms)
-                except OverflowError:  # longer than the ticks can tell (days): until stopped
-                    end = None
-            self._running = (group, times, end)
+                rest = times * (self.groups[group] * 100 // self.speed(group))
+                step = min(rest, _SPAN)
+                end, rest = time.ticks_add(now, step), rest - step
+            self._running = (group, times, end, rest)
             self._send(CMD_ACTION_GROUP_RUN, group, p[1], p[2])
         elif cmd == CMD_ACTION_GROUP_STOP:
             if self.running is not None:

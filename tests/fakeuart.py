@@ -4,7 +4,7 @@
 #   uart.feed(b"\x55\x55\x02\x07")             # bytes the controller "sent"
 #   uart.reply(request, response, delay_ms=5)  # answer a write, after a while
 #   uart.chunks = [1]                          # readinto() hands out 1 byte a call
-#   uart.takes = [3, None]                     # write() takes 3 bytes, then none
+#   uart.takes = [3, None]                     # write() takes 3 bytes, then none, then all
 #   uart.written()                             # every byte the driver wrote
 #
 # Like machine.UART, read() and readinto() return None when nothing is waiting
@@ -22,8 +22,9 @@ class FakeUART:
         self._out = bytearray(4096)
         self._nout = 0
         self.writes = 0  # number of write() calls
-        self.takes = None  # sizes write() takes in turn (None: nothing); None: all
+        self.takes = None  # sizes write() takes in turn, None for nothing; used up or None: all
         self._replies = {}
+        self._since = 0  # where in _out the request being written in parts began
         self._later = []  # [(due ticks_ms, bytes)], in order
 
     # What the tests do.
@@ -42,8 +43,8 @@ class FakeUART:
         self._later.insert(at, (due, bytes(data)))
 
     def reply(self, request, response, delay_ms=0):
-        """Answer every write of exactly `request` with `response`, or with
-        each of a list of responses in turn, one a write."""
+        """Answer every write of exactly `request` (in one write() or in parts)
+        with `response`, or with each of a list of responses in turn, one a write."""
         if isinstance(response, list):
             response = [bytes(r) for r in response]  # taken one a write
         else:
@@ -54,7 +55,7 @@ class FakeUART:
         return bytes(self._out[: self._nout])
 
     def clear(self):
-        self._nout = 0
+        self._nout = self._since = 0
         self.writes = 0
 
     # What machine.UART does.
@@ -119,13 +120,28 @@ class FakeUART:
         self._nout = at + nbytes
         self.writes += 1
         if self._replies:
-            answer = self._replies.get(bytes(out[at : at + nbytes]))
-            response = answer and answer[0]
-            if isinstance(response, list):
-                response = response.pop(0) if response else None
-            if response:
-                if answer[1]:
-                    self.feed_later(response, answer[1])
-                else:
-                    self.feed(response)
+            self._answer(at)
         return nbytes
+
+    def _answer(self, at):
+        # A request is answered once its last byte is written: in one write, or
+        # in parts (a write() that took less, then the rest).
+        for since in (self._since, at):
+            got = bytes(self._out[since : self._nout])
+            answer = self._replies.get(got)
+            if answer:
+                self._since = self._nout
+                response = answer[0]
+                if isinstance(response, list):
+                    response = response.pop(0) if response else None
+                if response:
+                    if answer[1]:
+                        self.feed_later(response, answer[1])
+                    else:
+                        self.feed(response)
+                return
+            for request in self._replies:
+                if request.startswith(got):  # more to come
+                    self._since = since
+                    return
+        self._since = self._nout

@@ -14,6 +14,10 @@ from busservo import (
 )
 from unix import uart
 
+# Two processes and a pty on a machine that may be busy: a generous timeout, so
+# that a slow round trip is not taken for a missing reply.
+TIMEOUT_MS = 1000
+
 
 def wait_for(path, ms):
     start = time.ticks_ms()
@@ -55,12 +59,12 @@ class EndToEnd(unittest.TestCase):
         bus.move_many([(1, 900), (2, 100), (3, 500)], 1500)
         start = time.ticks_ms()
         time.sleep_ms(300)
-        mid = bus.read_positions([1, 2, 3])
+        mid = bus.read_positions([1, 2, 3], TIMEOUT_MS)
         self.assertTrue(500 < mid[1] < 900, mid)
         self.assertTrue(100 < mid[2] < 500, mid)
         self.assertEqual(mid[3], 500)
         time.sleep_ms(1600 - time.ticks_diff(time.ticks_ms(), start))
-        self.assertEqual(bus.read_positions([1, 2, 3]), {1: 900, 2: 100, 3: 500})
+        self.assertEqual(bus.read_positions([1, 2, 3], TIMEOUT_MS), {1: 900, 2: 100, 3: 500})
         self.assertEqual(bus.positions, {1: 900, 2: 100, 3: 500})
 
     def test_a_group_runs_and_completes(self):
@@ -78,7 +82,7 @@ class EndToEnd(unittest.TestCase):
         self.assertFalse(self.bus.running)
 
     def test_battery_speed_and_unload(self):
-        self.assertEqual(self.bus.read_battery(), 7500)
+        self.assertEqual(self.bus.read_battery(TIMEOUT_MS), 7500)
         self.bus.set_group_speed(2, 1000)  # 2000 ms at 1000 %: 200 ms
         self.bus.run_group(2)
         start = time.ticks_ms()
@@ -86,7 +90,7 @@ class EndToEnd(unittest.TestCase):
         self.assertTrue(time.ticks_diff(time.ticks_ms(), start) < 1500)  # not 2000
         self.bus.move(4, 800, 0)
         self.bus.unload([4])
-        self.assertEqual(self.bus.read_positions([4]), {4: 800})
+        self.assertEqual(self.bus.read_positions([4], TIMEOUT_MS), {4: 800})
 
     def test_a_silent_controller_times_out(self):
         self.uart.write(bytes((0x55, 0x55, 0x03, 0xF0, 0x01)))  # the simulator's "be silent"
@@ -102,7 +106,7 @@ class EndToEnd(unittest.TestCase):
     def test_a_hang_up_raises_eio_at_once(self):
         # The other end goes away (an unplugged adapter; here the pty's server):
         # the next call says so, rather than reading nothing for ever.
-        self.assertEqual(self.bus.read_battery(), 7500)
+        self.assertEqual(self.bus.read_battery(TIMEOUT_MS), 7500)
         os.system("kill $(cat %s.pid)" % self.link)
         start = time.ticks_ms()
         error = None

@@ -3,13 +3,19 @@ import time
 import unittest
 
 import busservo
+import busservo_sim
 from busservo import (
     CMD_ACTION_GROUP_COMPLETE,
     CMD_ACTION_GROUP_RUN,
     CMD_ACTION_GROUP_STOP,
 )
 from busservo_sim import SimController
+from fakeuart import FakeUART
 from test_frames import drain as events
+
+RUN_8 = bytes((0x55, 0x55, 0x05, 0x06, 0x08, 0x01, 0x00))
+BATTERY = bytes((0x55, 0x55, 0x02, 0x0F))
+BATTERY_7500 = bytes((0x55, 0x55, 0x04, 0x0F, 0x4C, 0x1D))
 
 
 class Clock:
@@ -21,6 +27,32 @@ class Clock:
 
     def step(self, ms):
         self.now += ms
+
+
+class BoardTime:
+    """time as on a board, for busservo_sim.time: ticks wrap at 2**30 ms and
+    ticks_add() refuses half that (the unix port's wrap at 2**62). Starts a
+    second before the wrap."""
+
+    PERIOD = 1 << 30
+
+    def __init__(self):
+        self.now = self.PERIOD - 1000
+
+    def ticks_ms(self):
+        return self.now
+
+    def step(self, ms):
+        self.now = (self.now + ms) % self.PERIOD
+
+    def ticks_diff(self, end, start):
+        half = self.PERIOD // 2
+        return (end - start + half) % self.PERIOD - half
+
+    def ticks_add(self, ticks, delta):
+        if not -self.PERIOD // 2 < delta < self.PERIOD // 2:
+            raise OverflowError("ticks interval overflow")
+        return (ticks + delta) % self.PERIOD
 
 
 class Simulator(unittest.TestCase):
@@ -153,26 +185,134 @@ class Simulator(unittest.TestCase):
         self.assertEqual(self.sim.write(run_8 + b"zz", 7), 7)
         self.assertEqual(self.sim.beeps, 0)
 
-    def test_a_group_longer_than_the_ticks_can_tell_does_not_wedge_it(self):
-        # On a board, ticks_add() refuses a span of half the ticks' period
-        # (2**29 ms, 6 days): 65535 runs of a 2 s group at 1 % is 150 years.
-        import busservo_sim
-        import wire
+    def test_write_clamps_an_offset_past_the_end(self):
+        self.assertEqual(self.sim.write(RUN_8, 50, 3), 0)
+        self.assertEqual(self.sim.write(RUN_8, 7, 1), 0)
+        self.assertEqual(self.sim.write(RUN_8, 0), 0)
+        self.assertIsNone(self.sim.running)
+        self.assertEqual(self.sim.beeps, 0)
 
-        clock = wire.Clock()
-        busservo_sim.time = clock
+    def test_a_run_longer_than_ticks_add_can_span_ends_on_time(self):
+        # 65535 runs of a 2 s group at 1 %: 200 s a run, 152 days in all, where
+        # a board's ticks_add() takes 6 days at most.
+        board = BoardTime()
+        busservo_sim.time = board
         try:
-            sim = SimController(ticks_ms=clock.ticks_ms)
+            sim = SimController(ticks_ms=board.ticks_ms)
             bus = busservo.BusServo(sim)
             bus.set_group_speed(2, 1)
             bus.run_group(2, 65535)
-            self.assertEqual(sim.running, 2)  # until stopped
+            self.assertEqual(events(bus), [CMD_ACTION_GROUP_RUN])
+            left = 65535 * 200000
+            while left > 1 << 28:  # 3 days a look
+                board.step(1 << 28)
+                left -= 1 << 28
+                self.assertEqual(sim.running, 2)
+            board.step(left - 1)
+            self.assertEqual(sim.running, 2)
+            self.assertEqual(events(bus), [])
+            board.step(1)
+            self.assertIsNone(sim.running)
+            self.assertEqual(events(bus), [CMD_ACTION_GROUP_COMPLETE])
+            self.assertEqual((bus.group, bus.times), (2, 65535))
+        finally:
+            busservo_sim.time = time
+
+    def test_a_long_run_is_stopped_and_the_next_runs(self):
+        board = BoardTime()
+        busservo_sim.time = board
+        try:
+            sim = SimController(ticks_ms=board.ticks_ms)
+            bus = busservo.BusServo(sim)
+            bus.set_group_speed(2, 1)
+            bus.run_group(2, 65535)
+            board.step(1 << 29)
+            self.assertEqual(sim.running, 2)
             bus.stop_group()
             self.assertIsNone(sim.running)
             bus.run_group(8)
             self.assertEqual(sim.running, 8)
+            board.step(1500)
+            self.assertIsNone(sim.running)
+            self.assertEqual(
+                events(bus),
+                [CMD_ACTION_GROUP_RUN, CMD_ACTION_GROUP_STOP]
+                + [CMD_ACTION_GROUP_RUN, CMD_ACTION_GROUP_COMPLETE],
+            )
         finally:
             busservo_sim.time = time
+
+    def test_a_frame_that_raises_is_gone_and_the_frames_after_it_are_done(self):
+        # A battery set in volts, not mV, by mistake: its frame raises, once.
+        self.sim.battery = 7.5
+        with self.assertRaises(TypeError):
+            self.sim.write(BATTERY + RUN_8)
+        self.sim.battery = 7500
+        self.assertEqual(self.sim.write(BATTERY), 4)  # the RUN first, then this
+        self.assertEqual(self.sim.running, 8)
+        self.assertEqual(self.sim.read(), RUN_8 + BATTERY_7500)
+        self.assertEqual(self.sim.beeps, 0)
+
+
+class UartForms(unittest.TestCase):
+    # Every UART-like object here takes the stream protocol's write(buf),
+    # write(buf, n) and write(buf, off, n), off clamped to len(buf) and n to what
+    # is left; readinto(buf, n) clamps n to len(buf) and never resizes buf.
+
+    def test_the_fake_uart_writes_the_forms(self):
+        uart = FakeUART()
+        self.assertEqual(uart.write(b"ab" + BATTERY + b"cd", 2, 4), 4)
+        self.assertEqual(uart.write(RUN_8, 3), 3)
+        self.assertEqual(uart.write(RUN_8, 3, 100), 4)
+        self.assertEqual(uart.write(RUN_8, 50, 2), 0)
+        self.assertEqual(uart.write(RUN_8), 7)
+        self.assertEqual(uart.written(), BATTERY + RUN_8 + RUN_8)
+
+    def test_the_fake_uart_takes_what_takes_says(self):
+        uart = FakeUART()
+        uart.takes = [3, None, 10]
+        data = bytes(range(20))
+        self.assertEqual(uart.write(data), 3)
+        self.assertIsNone(uart.write(data, 3, 17))
+        self.assertEqual(uart.write(data, 3, 17), 10)
+        self.assertEqual(uart.write(data, 13, 7), 7)  # the list is used up: all
+        self.assertEqual(uart.written(), data)
+        uart.takes = []
+        self.assertEqual(uart.write(data), 20)
+
+    def test_the_fake_uart_reply_comes_to_a_whole_write(self):
+        uart = FakeUART()
+        uart.reply(BATTERY, BATTERY_7500)
+        self.assertEqual(uart.write(b"x" + BATTERY, 1, 4), 4)
+        self.assertEqual(uart.read(), BATTERY_7500)
+
+    def test_the_fake_uart_answers_a_request_written_in_parts(self):
+        uart = FakeUART()
+        uart.reply(BATTERY, [BATTERY_7500, BATTERY_7500[:4] + b"\x00\x00"])
+        uart.takes = [1, None, 2]
+        self.assertEqual(uart.write(BATTERY), 1)
+        self.assertIsNone(uart.write(BATTERY, 1, 3))
+        self.assertEqual(uart.write(BATTERY, 1, 3), 2)
+        self.assertEqual(uart.any(), 0)
+        self.assertEqual(uart.write(BATTERY, 3, 1), 1)
+        self.assertEqual(uart.read(), BATTERY_7500)
+        self.assertEqual(uart.write(BATTERY, 2), 2)  # a part, never finished
+        self.assertEqual(uart.write(BATTERY), 4)  # a whole one is still answered
+        self.assertEqual(uart.read(), BATTERY_7500[:4] + b"\x00\x00")
+
+    def test_readinto_clamps_to_the_buffer(self):
+        sim = SimController()
+        sim.write(BATTERY)
+        fake = FakeUART()
+        fake.feed(BATTERY_7500)
+        for uart in (sim, fake):
+            buf = bytearray(4)
+            self.assertEqual(uart.readinto(buf, 100), 4)
+            self.assertEqual(buf, BATTERY_7500[:4])
+            self.assertEqual(uart.readinto(buf, 1), 1)
+            self.assertEqual(uart.readinto(buf), 1)
+            self.assertEqual(buf, bytes((0x1D, 0x55, 0x04, 0x0F)))  # still 4 long
+            self.assertIsNone(uart.readinto(buf, 100))
 
 
 if __name__ == "__main__":
