@@ -32,11 +32,10 @@ _QUEUE = const(32)  # frames a blocking query may hold back for poll()
 _TIMEOUT_MS = const(100)  # battery: 10 bytes at 9600 baud take about 10 ms
 _TIMEOUT_PER_ID_MS = const(10)  # 4 more bytes on the wire and one servo to ask
 _TIMEOUT_MAX_MS = const(60000)
-_WINDOW_MS = const(65536)  # longer than any reply may be due
 _LATE_MS = const(100)  # how long after its query gave up a reply may still come
 _GAP_MS = const(20)  # a frame's bytes come closer together than this, FIFOs and all
-_TICKS = const(0x3FFFFFFF)  # wire times are ticks_us() modulo 2**30, on every port
-_AHEAD_US = const(2000000)  # more ahead than this (1920 bytes) is a wrap: idle
+_TICKS = const(0x3FFFFFFF)  # ticks modulo 2**30, as a 32-bit port's wrap
+_AHEAD_MS = const(2000)  # more ahead than this (1920 bytes at 9600 baud): a wrap, idle
 _SLACK_MS = const(50)  # for a UART's transmit buffer to make room, beyond the wire time
 
 # The Length of each frame the controller sends, by its command (0: it sends
@@ -77,10 +76,11 @@ class BusServo:
         self._uart = uart
         self._write = uart.write  # one lookup, not two, per command
         self._any = uart.any
-        # The wire: a byte is 10 bits (8N1). _idle (ticks_us) is when what was
+        # The wire: a byte is 10 bits (8N1). _idle (ticks_ms) and _frac (us) say when what was
         # written will have left it; _cut is a frame the UART took only part of.
         self._byte_us = (10000000 + baudrate - 1) // baudrate
-        self._idle = time.ticks_us() & _TICKS
+        self._idle = time.ticks_ms() & _TICKS
+        self._frac = 0
         self._cut_at = 0  # bytes of it sent (0: nothing is cut)
         self._tx = bytearray(_FRAME_MAX)
         self._tx[0] = self._tx[1] = _HEADER  # reading never uses tx: it stays
@@ -132,12 +132,14 @@ class BusServo:
         took = self._write(frame)
         if took != 10:
             self._finish(frame, took, 10)
-        else:  # the usual case: the UART took it all. _sent(10), inline (see there)
-            servo_id = time.ticks_us()
-            position = self._idle
-            if (position - servo_id) & _TICKS >= _AHEAD_US:
-                position = servo_id
-            self._idle = (position + 10 * self._byte_us) & _TICKS
+        else:  # the usual case: the UART took it all. _sent(10), inline (see there).
+            servo_id = time.ticks_ms()
+            position = 10 * self._byte_us
+            if (self._idle - servo_id) & _TICKS < _AHEAD_MS:
+                servo_id = self._idle
+                position += self._frac
+            self._idle = (servo_id + position // 1000) & _TICKS
+            self._frac = position % 1000
 
     def move_many(self, servos, time_ms):
         """CMD_SERVO_MOVE: move 1..83 servos, given as (id, position) pairs or a
@@ -243,8 +245,8 @@ class BusServo:
     def wire_ms(self):
         """How many ms of what was written are still ahead on the wire (0 when
         idle). A query's timeout counts from when its request has left it."""
-        ahead = (self._idle - time.ticks_us()) & _TICKS
-        return (ahead + 999) // 1000 if ahead < _AHEAD_US else 0
+        ahead = (self._idle - time.ticks_ms()) & _TICKS
+        return ahead + (self._frac > 0) if ahead < _AHEAD_MS else 0
 
     def _send(self, cmd, nparams):
         if self._cut_at:
@@ -261,12 +263,17 @@ class BusServo:
 
     def _sent(self, n):
         # n more bytes are on their way: the wire is busy until they have left,
-        # behind what is on it already (or from now, if it was idle).
-        now = time.ticks_us()
+        # behind what is on it already (or from now, if it was idle). Kept in
+        # ms, which wrap after 12 days (us would after 18 minutes), and us.
+        now = time.ticks_ms()
         idle = self._idle
-        if (idle - now) & _TICKS >= _AHEAD_US:
+        us = n * self._byte_us
+        if (idle - now) & _TICKS < _AHEAD_MS:
+            us += self._frac
+        else:
             idle = now
-        self._idle = (idle + n * self._byte_us) & _TICKS
+        self._idle = (idle + us // 1000) & _TICKS
+        self._frac = us % 1000
 
     def _finish(self, buf=None, at=0, end=0):
         # Write the rest of a frame the UART took only part of: buf from at to
@@ -328,14 +335,23 @@ class BusServo:
         battery or positions hold it). It raises as read_battery() does."""
         kind = ids is not None  # _due[kind]: the battery's, or the positions'
         if timeout_ms is None:
-            timeout_ms = _TIMEOUT_MS + _TIMEOUT_PER_ID_MS * _count("ids", ids, 84)
+            timeout_ms = _TIMEOUT_MS + (kind and _TIMEOUT_PER_ID_MS * _count("ids", ids, 84))
         _check("timeout_ms", timeout_ms, 0, _TIMEOUT_MAX_MS)
+        start = time.ticks_ms()
         while True:  # decode what has come first: none of it answers this query
             got = self._next_frame()
             if got is None:
+                # An earlier request of this kind may still be answered: let its
+                # reply come (as an event), as long as this query would wait for
+                # its own (a bound that holds if the ticks came round, too).
                 due = self._due[kind]
-                if due is None or not 0 < time.ticks_diff(due, time.ticks_ms()) < _WINDOW_MS:
-                    break  # no earlier request of this kind can still be answered
+                now = time.ticks_ms()
+                if (
+                    due is None
+                    or time.ticks_diff(due, now) <= 0
+                    or time.ticks_diff(now, start) > timeout_ms + _LATE_MS
+                ):
+                    break
                 yield
             self._hold(got)
         if kind:
@@ -372,25 +388,25 @@ class BusServo:
         applying it to the state, or None. Never blocks; one frame per call."""
         if not self._queued and self._r == self._w and not self._any():
             return None  # the usual case in a control loop: one uart.any()
-        if self._queued:  # frames a query held back come first
-            queue = self._queue
-            cmd = queue[0]
-            self._queued -= 1
-            for i in range(self._queued):  # short, and seldom used: shift it
-                queue[i] = queue[i + 1]
-            return cmd
-        return self._next_frame()
+        return self._next_frame(True)
 
-    def _next_frame(self):
-        # Find the next whole frame in rx[_r:_w], reading what the UART holds
-        # as needed; apply it to the state and return its command. None once
-        # the UART holds nothing more and no whole frame is in rx. _r and _w
-        # are stored before every call to the UART, so an exception from it
-        # loses no byte and leaves nothing half done.
+    def _next_frame(self, held=False):
+        # Find the next whole frame in rx[_r:_w] (or with held, one a query
+        # held back first), reading what the UART holds as needed; apply it to
+        # the state and return its command. None once the UART holds nothing
+        # more and no whole frame is in rx. _r and _w are stored before every
+        # call to the UART, so an exception from it loses no byte read.
         if self._busy:
             return None  # a callback polled while we decode: the first call goes on
         self._busy = True
         try:
+            if held and self._queued:  # frames a query held back come first
+                queue = self._queue
+                cmd = queue[0]
+                self._queued -= 1
+                for i in range(self._queued):  # short, and seldom used: shift it
+                    queue[i] = queue[i + 1]
+                return cmd
             rx = self._rx
             budget = _BUDGET
             while True:

@@ -213,6 +213,36 @@ class Wire(unittest.TestCase):
 
     # 7. The smaller ones.
 
+    def test_the_wire_is_idle_after_any_time_idle(self):
+        # Ticks wrap: us after 17.9 minutes, ms after 12.4 days on a 32-bit port.
+        for port, w, bus in ports():
+            bus.move(1, 500, 0)
+            for minutes in (17.87, 17.9, 35.8, 60):
+                w.clock.advance_us(int(minutes * 60000000))
+                self.assertEqual(bus.wire_ms(), 0, (port, minutes))
+                start = w.clock.now_us
+                self.assertEqual(bus.read_battery(), 7500, port)
+                self.assertTrue(w.clock.now_us - start < 15000, (port, minutes))
+
+    def test_a_query_long_after_one_timed_out_waits_no_longer_than_its_own(self):
+        for port, w, bus in ports():
+            w.sim.silent = True
+            self.assertTrue(timed_out(bus.read_battery), port)
+            w.sim.silent = False
+            w.clock.advance_ms((1 << 30) - 30000)  # 12.4 days: the ms ticks came round
+            start = w.clock.now_us
+            self.assertEqual(bus.read_battery(), 7500, port)
+            self.assertTrue(w.clock.now_us - start < 250000, port)  # not 30 s
+
+    def test_the_queries_defaults(self):
+        for port, _, bus in ports():
+            self.assertEqual(bus.read_battery(timeout_ms=None), 7500, port)
+            bus.battery = None
+            steps = len(list(bus.ask()))  # the battery, by default; a step a wait
+            self.assertEqual(bus.battery, 7500, port)
+            self.assertTrue(steps > 0, port)
+            self.assertEqual(bus.read_positions([2, 1]), {2: 500, 1: 500}, port)
+
     def test_readinto_is_never_asked_for_more_than_its_buffer(self):
         from fakeuart import FakeUART
 
