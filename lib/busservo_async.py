@@ -154,7 +154,13 @@ class AsyncBusServo:
             end = cmd == CMD_ACTION_GROUP_COMPLETE or cmd == CMD_ACTION_GROUP_STOP
             if cmd == CMD_ACTION_GROUP_RUN and self._run is False and bus.group == self._group:
                 self._run = True  # the group run_group() started has started
-            elif end and self._run is True:
+            elif end and (
+                self._run is True
+                # its RUN lost on the line: its COMPLETE still names it
+                or self._run is False
+                and cmd == CMD_ACTION_GROUP_COMPLETE
+                and bus.group == self._group
+            ):
                 self._run = cmd
             for waiter in self._waiters:
                 # A group's end, unless it is an earlier group's. It is still

@@ -156,6 +156,19 @@ class Wire(unittest.TestCase):
             w.clock.advance_ms(140)
             self.assertEqual(bus.wire_ms(), 0, port)
 
+    def test_seconds_of_bytes_ahead_are_counted_whole(self):
+        # A UART with a 4 KB transmit buffer: 3 s of bytes ahead, all counted.
+        for port in wire.PORTS:
+            w = wire.World(port, txbuf=4096)
+            busservo.time = w.clock
+            bus = busservo.BusServo(w.uart)
+            for i in range(24):  # 24 x 127 bytes
+                bus.move_many([(s, 500 + i) for s in range(1, 41)], 100)
+            ahead = w.tx_backlog_us() // 1000
+            # The driver rounds a byte up to 1042 us: it may say a little more.
+            self.assertTrue(0 <= bus.wire_ms() - ahead <= 5, (port, bus.wire_ms(), ahead))
+            self.assertEqual(bus.read_battery(), 7500, port)
+
     def test_wire_ms_counts_10_bits_a_byte(self):
         for port, w, bus in ports():
             self.assertEqual(bus.wire_ms(), 0, port)
@@ -369,6 +382,17 @@ class Async(unittest.TestCase):
 
         for port, w, bus in async_ports():
             self.assertEqual(asyncio.run(main(w, bus)), (7500, []), port)
+
+    def test_wait_group_done_when_its_run_echo_is_lost(self):
+        # A byte of the RUN that comes back is lost on the line: the COMPLETE,
+        # which names the group, still ends the wait (it used to hang for ever).
+        async def main(w, bus):
+            w.drop(1, skip=3)
+            bus.run_group(1)
+            return await bus.wait_group_done(timeout_ms=2000)
+
+        for port, w, bus in async_ports():
+            self.assertEqual(asyncio.run(main(w, bus)), CMD_ACTION_GROUP_COMPLETE, port)
 
     def test_a_bad_timeout_writes_nothing(self):
         for port, w, bus in async_ports():
