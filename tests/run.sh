@@ -20,22 +20,38 @@ passed=0
 failed=0
 skipped=0
 
-# run_module LABEL MODULE: run one module, show its output, add up its counts. unittest.main()
-# is called here rather than by the module: micropython-unittest 0.4 ends it with
-# sys.exit(failures > 0), which MicroPython prints and turns into exit 1 even when all passed.
+# The failed tests, a line each, for the summary at the end.
+failures=""
+note_failure() {
+    failures="$failures
+  $1"
+}
+
+# run_module LABEL PASS MODULE: run one module, show its output, add up its counts and note
+# what failed. unittest.main() is called here rather than by the module:
+# micropython-unittest 0.4 ends it with sys.exit(failures > 0), which MicroPython prints and
+# turns into exit 1 even when all passed.
 run_module() {
     out=$(sh boards/unix.sh -c "import sys, unittest
 sys.path.append('tests')
 try:
-    unittest.main('$2')
+    unittest.main('$3')
 except SystemExit:
     pass" 2>&1)
     printf '%s\n' "$out" | sed "s|^|$1 |"
     ran=$(printf '%s\n' "$out" | sed -n 's/^Ran \([0-9]*\) tests*$/\1/p' | tail -n 1)
     bad=$(printf '%s\n' "$out" | sed -n 's/^FAILED (failures=\([0-9]*\), errors=\([0-9]*\)).*/\1 + \2/p')
     skip=$(printf '%s\n' "$out" | grep -c '\.\.\. *skipped:')
+    # Each test's line is "NAME (CLASS) ..." then its verdict, which its own output may have
+    # pushed onto a later line; the tracebacks after "Ran N tests" are not read.
+    names=$(printf '%s\n' "$out" | awk '
+        /^Ran [0-9]+ tests?$/ { exit }
+        match($0, /^test[^ ]* \([^ ]*\) \.\.\./) { name = substr($0, 1, RLENGTH - 4) }
+        / FAIL$/ { print name }')
     if [ -z "$ran" ]; then
         echo "$1 did not run to its end"
+        last=$(printf '%s\n' "$out" | sed -n 's/^\(test[^ ]* ([^ ]*)\) \.\.\..*/\1/p' | tail -n 1)
+        note_failure "$3 ($2): did not run to its end${last:+, in $last}"
         failed=$((failed + 1))
         return
     fi
@@ -43,21 +59,27 @@ except SystemExit:
     passed=$((passed + ran - bad - skip))
     failed=$((failed + bad))
     skipped=$((skipped + skip))
+    while IFS= read -r name; do
+        [ -z "$name" ] || note_failure "$3 ($2): $name"
+    done <<EOF
+$names
+EOF
 }
 
 for t in tests/test_*.py; do
     name=$(basename "$t" .py)
-    run_module "$name:" "$name"
+    run_module "$name:" .py "$name"
 done
 
 # Again, against lib/ compiled by mpy-cross -O3 and nothing else: the form most boards run.
 if sh boards/unix.sh --mpy >/dev/null; then
     for t in tests/test_*.py; do
         name=$(basename "$t" .py)
-        BUSSERVO_LIB=.venv/mpy run_module "$name (.mpy):" "$name"
+        BUSSERVO_LIB=.venv/mpy run_module "$name (.mpy):" .mpy "$name"
     done
 else
     echo "mpy-cross failed"
+    note_failure "mpy-cross: the .mpy pass did not run"
     failed=$((failed + 1))
 fi
 
@@ -68,7 +90,14 @@ if .venv/bin/ruff check -q $CODE && .venv/bin/ruff format -q --check $CODE; then
     passed=$((passed + 1))
 else
     echo "style: ruff ... FAIL (see above; '.venv/bin/ruff format $CODE')"
+    note_failure "style: ruff (see its output above)"
     failed=$((failed + 1))
+fi
+
+# What failed, by name, just above the counts (which CI reads from the very last line).
+if [ -n "$failures" ]; then
+    echo
+    echo "Failed:$failures"
 fi
 
 if [ "$skipped" = 0 ]; then

@@ -1,0 +1,374 @@
+# The scripts a maker meets on the first day: boards/unix.sh (from any folder,
+# --help, the caller's MICROPYPATH, Ctrl-C, the set-up's progress),
+# boards/simpty.py (its --link never deletes what it did not make),
+# tests/run.sh's summary, and that every script is executable.
+import os
+import unittest
+
+from shell import scratch, sh
+
+REPO = os.getcwd()  # tests/run.sh runs every test from the repository's root
+UNIX_SH = REPO + "/boards/unix.sh"
+
+# Runs a command as from a terminal: SIGINT not ignored (sh ignores it in what it
+# starts in the background) and in a process group of its own, so that
+# `kill -s INT -- -PID` is a Ctrl-C to that command and its children alone.
+AS_FROM_A_TERMINAL = (
+    REPO + "/.venv/bin/python -c 'import os, signal, sys; "
+    "signal.signal(signal.SIGINT, signal.SIG_DFL); os.setsid(); "
+    "os.execvp(sys.argv[1], sys.argv[1:])'"
+)
+
+
+def write(path, text):
+    with open(path, "w") as f:
+        f.write(text)
+
+
+def read(path):
+    with open(path) as f:
+        return f.read()
+
+
+def folder(name):
+    path = scratch(name)
+    os.mkdir(path)
+    return path
+
+
+def up_to_repo(path):
+    """The repository's path relative to folder path: ../../work/main, say."""
+    return "/".join([".."] * path.count("/")) + REPO
+
+
+def lexists(path):
+    return sh("test -L %s || test -e %s" % (path, path))[0]
+
+
+def readlink(path):
+    ok, out = sh("readlink " + path)
+    return out.strip() if ok else None
+
+
+def launch(command, base, terminal=False):
+    """Start command in the background: its output goes to base.log, its pid to
+    base.pid, and its exit status to base.rc once it has ended."""
+    if terminal:
+        command = AS_FROM_A_TERMINAL + " " + command
+    os.system(
+        "(%s >%s.log 2>&1 & echo $! >%s.pid; wait $!; echo $? >%s.rc) >/dev/null 2>&1 &"
+        % (command, base, base, base)
+    )
+    return int(wait_until(base + ".pid", "\n", 5000))
+
+
+def wait_until(path, text, ms):
+    """path's content once it holds text, or None after ms."""
+    # shell.wait_for() with text is the same, but returns None for an empty text.
+    import time
+
+    start = time.ticks_ms()
+    while time.ticks_diff(time.ticks_ms(), start) < ms:
+        try:
+            content = read(path)
+            if text in content:
+                return content
+        except OSError:
+            pass
+        time.sleep_ms(20)
+    return None
+
+
+def ended(base, pid, ms=10000):
+    """The exit status of what launch() started (killed if it has not ended in ms)."""
+    rc = wait_until(base + ".rc", "\n", ms)
+    if rc is None:
+        os.system("kill -s KILL -- -%d 2>/dev/null; kill -s KILL %d 2>/dev/null" % (pid, pid))
+        wait_until(base + ".rc", "\n", 5000)
+        return None
+    return int(rc)
+
+
+class FromAnyFolder(unittest.TestCase):
+    def setUp(self):
+        self.dir = folder("robot")
+
+    def tearDown(self):
+        sh("rm -rf " + self.dir)
+
+    def test_a_script_runs_in_the_callers_folder_with_the_callers_micropypath(self):
+        d = self.dir
+        os.mkdir(d + "/mods")
+        write(d + "/mods/mymod.py", "X = 42\n")
+        write(d + "/mods/busservo.py", "raise ImportError('a stale copy came first')\n")
+        write(d + "/data.txt", "from the caller's folder\n")
+        write(
+            d + "/robot.py",
+            "import sys\nimport busservo\nimport mymod\n"
+            "print(busservo.__file__)\nprint(mymod.X, sys.argv[1:])\n"
+            "print(open('data.txt').read().strip())\n",
+        )
+        # As `cd robot && sh ../busservo/boards/unix.sh robot.py a b`:
+        command = "cd %s && MICROPYPATH=mods sh %s/boards/unix.sh robot.py a b"
+        ok, out = sh(command % (d, up_to_repo(d)))
+        self.assertTrue(ok, out)
+        lines = out.split("\n")
+        self.assertTrue(lines[0].startswith(REPO + "/"), out)  # the checkout's driver
+        self.assertEqual(lines[1:4], ["42 ['a', 'b']", "from the caller's folder", ""], out)
+
+    def test_with_no_micropypath_micropythons_default_path_still_counts(self):
+        # ~/.micropython/lib is where `micropython -m mip install` puts packages.
+        d = self.dir
+        sh("mkdir -p %s/.micropython/lib" % d)
+        write(d + "/.micropython/lib/installed.py", "X = 'mip-installed'\n")
+        ok, out = sh(
+            "cd %s && unset MICROPYPATH && HOME=%s sh %s -c 'import installed; print(installed.X)'"
+            % (d, d, UNIX_SH)
+        )
+        self.assertEqual((ok, out), (True, "mip-installed\n"))
+
+    def test_sim_pty_makes_its_link_in_the_callers_folder(self):
+        base = self.dir + "/sim"
+        pid = launch("cd %s && exec sh %s --sim-pty --link bus" % (self.dir, UNIX_SH), base)
+        try:
+            self.assertTrue(wait_until(base + ".log", "Ctrl-C stops it", 15000))
+            pty = readlink(self.dir + "/bus")
+            self.assertTrue(pty and pty.startswith("/dev/pts/"), read(base + ".log"))
+        finally:
+            os.system("kill %d" % pid)
+        self.assertEqual(ended(base, pid), 0)
+        self.assertFalse(lexists(self.dir + "/bus"))
+
+    def test_help_prints_the_forms_and_other_options_go_to_micropython(self):
+        for option in ("--help", "-h"):
+            ok, out = sh("cd %s && sh %s %s" % (self.dir, UNIX_SH, option))
+            self.assertTrue(ok, option + ": " + out)
+            for form in ("sh boards/unix.sh examples/demo.py", "--setup", "--sim-pty", "--mpy"):
+                self.assertIn(form, out, option)
+            self.assertEqual(os.listdir(self.dir), [])  # and no set-up in the caller's folder
+        ok, out = sh("sh boards/unix.sh -c 'print(6 * 7)'")
+        self.assertEqual((ok, out), (True, "42\n"))
+        ok, out = sh("sh boards/unix.sh --no-such-option")
+        self.assertFalse(ok)
+        self.assertIn("Invalid command line arguments", out)  # micropython's own answer
+
+
+class CtrlC(unittest.TestCase):
+    def setUp(self):
+        self.dir = folder("ctrl-c")
+
+    def tearDown(self):
+        sh("rm -rf " + self.dir)
+
+    def interrupt(self, command, ready):
+        """Start command as from a terminal, press Ctrl-C once it has printed
+        ready; return (its exit status, its output)."""
+        base = self.dir + "/run"
+        pid = launch(command, base, terminal=True)
+        if wait_until(base + ".log", ready, 15000) is None:
+            ended(base, pid, 0)
+            self.fail("%r never printed %r: %s" % (command, ready, read(base + ".log")))
+        os.system("kill -s INT -- -%d" % pid)
+        return ended(base, pid), read(base + ".log")
+
+    def test_ctrl_c_ends_a_script_quietly_with_status_130(self):
+        loop = self.dir + "/loop.py"
+        write(loop, "import time\nprint('looping')\nwhile True:\n    time.sleep_ms(10)\n")
+        rc, out = self.interrupt("sh %s -X heapsize=256K %s" % (UNIX_SH, loop), "looping")
+        self.assertEqual(rc, 130, out)
+        self.assertEqual(out, "looping\n")  # no traceback, no KeyboardInterrupt
+
+    def test_a_script_that_catches_ctrl_c_still_cleans_up(self):
+        robot = self.dir + "/robot.py"
+        write(
+            robot,
+            "import time\nprint('moving')\ntry:\n    while True:\n        time.sleep_ms(10)\n"
+            "except KeyboardInterrupt:\n    print('servos unloaded')\n",
+        )
+        rc, out = self.interrupt("sh %s %s" % (UNIX_SH, robot), "moving")
+        self.assertEqual((rc, out), (0, "moving\nservos unloaded\n"))
+
+    def test_an_error_is_reported_as_micropython_itself_reports_it(self):
+        bad = self.dir + "/bad.py"
+        write(bad, "def f():\n    raise ValueError('boom')\n\n\nf()\n")
+        direct = sh("MICROPYPATH= .venv/bin/micropython %s; echo status $?" % bad)[1]
+        self.assertIn("ValueError: boom", direct)
+        self.assertEqual(sh("sh boards/unix.sh %s; echo status $?" % bad)[1], direct)
+
+    def test_ctrl_c_stops_the_simulator_quietly_and_removes_its_link(self):
+        link = self.dir + "/bus"
+        command = "sh %s --sim-pty --link %s" % (UNIX_SH, link)
+        rc, out = self.interrupt(command, "Ctrl-C stops it")
+        self.assertEqual(rc, 130, out)
+        self.assertFalse("Traceback" in out or "KeyboardInterrupt" in out, out)
+        self.assertFalse(lexists(link))
+
+
+class SimPtyLink(unittest.TestCase):
+    def setUp(self):
+        self.dir = folder("link")
+
+    def tearDown(self):
+        sh("rm -rf " + self.dir)
+
+    def test_what_is_at_the_link_path_is_refused_and_kept(self):
+        d = self.dir
+        write(d + "/target", "keep me\n")
+        sh("ln -s %s/target %s/to-a-file && mkdir %s/dir" % (d, d, d))
+        write(d + "/file", "keep me too\n")
+        for name in ("file", "to-a-file", "dir"):
+            path = d + "/" + name
+            ok, out = sh("timeout 10 sh %s --sim-pty --link %s" % (UNIX_SH, path))
+            self.assertFalse(ok, name)
+            self.assertIn(path, out, name)
+            self.assertIn("--link", out, name)
+            self.assertFalse("Traceback" in out, out)
+        self.assertEqual(read(d + "/file"), "keep me too\n")
+        self.assertEqual(readlink(d + "/to-a-file"), d + "/target")
+        self.assertEqual(read(d + "/target"), "keep me\n")
+        self.assertEqual(sorted(os.listdir(d + "/dir")), [])
+
+    def test_a_stale_link_is_replaced_and_one_not_its_own_is_left_at_exit(self):
+        d = self.dir
+        sh("ln -s /dev/pts/999999 %s/bus" % d)  # an earlier run's, its pty long gone
+        base = d + "/sim"
+        pid = launch("sh %s --sim-pty --link %s/bus" % (UNIX_SH, d), base)
+        try:
+            self.assertTrue(wait_until(base + ".log", "Ctrl-C stops it", 15000))
+            pty = readlink(d + "/bus")
+            self.assertTrue(pty.startswith("/dev/pts/"), pty)
+            self.assertNotEqual(pty, "/dev/pts/999999")
+            self.assertIn(pty, read(base + ".log"))
+            # The user points the link elsewhere while the simulator runs.
+            sh("rm %s/bus && ln -s %s/mine %s/bus" % (d, d, d))
+        finally:
+            os.system("kill %d" % pid)
+        self.assertEqual(ended(base, pid), 0)
+        self.assertEqual(readlink(d + "/bus"), d + "/mine")
+
+
+FAKE_PYTHON3 = """#!/bin/sh
+# python3 -m venv DIR, and no more: a venv whose pip and micropython note what
+# they are asked and pretend it is done.
+[ "$1 $2" = "-m venv" ] || exit 3
+mkdir -p "$3/bin"
+cat >"$3/bin/pip" <<'EOF'
+#!/bin/sh
+echo "$*" >>"$(dirname "$0")/../pip-args"
+EOF
+cat >"$3/bin/micropython" <<'EOF'
+#!/bin/sh
+[ "$1 $2 $3 $4 $6" = "-m mip install --target unittest" ] || exit 3
+echo "# unittest" >"$5/unittest.py"
+EOF
+chmod +x "$3/bin/pip" "$3/bin/micropython"
+"""
+
+
+class SetUp(unittest.TestCase):
+    def test_the_set_up_says_what_it_does_step_by_step(self):
+        # A copy of boards/unix.sh in a fresh checkout, with a python3 that
+        # makes a stand-in venv: the set-up's own steps, in a second.
+        repo = folder("setup")
+        elsewhere = folder("elsewhere")
+        try:
+            sh("mkdir %s/boards %s/bin && cp boards/unix.sh %s/boards/" % (repo, repo, repo))
+            write(repo + "/bin/python3", FAKE_PYTHON3)
+            sh("chmod +x %s/bin/python3" % repo)
+            command = "cd %s && PATH=%s/bin:$PATH sh %s/boards/unix.sh --setup" % (
+                elsewhere,
+                repo,
+                repo,
+            )
+            ok, out = sh(command)
+            self.assertTrue(ok, out)
+            lines = out.strip().split("\n")
+            steps = [line for line in lines if "/3]" in line]
+            self.assertEqual([s.split("[")[1][:3] for s in steps], ["1/3", "2/3", "3/3"], out)
+            self.assertTrue(len(lines) <= 5, out)  # and quiet otherwise
+            self.assertEqual(os.listdir(elsewhere), [])  # .venv/ is the repository's
+            pins = [line for line in read(UNIX_SH).split("\n") if line.startswith("PINS=")]
+            pins = pins[0][len('PINS="') : -1].split()
+            asked = read(repo + "/.venv/pip-args").split()
+            for pin in pins:
+                self.assertIn(pin, asked)
+            self.assertIn(" ".join(pins), read(repo + "/.venv/ready"))
+            self.assertEqual(sh(command), (True, ""))  # ready: silent, and at once
+        finally:
+            sh("rm -rf %s %s" % (repo, elsewhere))
+
+
+MIXED = """import unittest
+
+
+class Mixed(unittest.TestCase):
+    def test_bad(self):
+        self.assertEqual(1, 2)
+
+    def test_good(self):
+        pass
+
+    def test_noisy_error(self):
+        print("\\na line of its own")
+        raise ValueError("no")
+"""
+
+DIES = """import os
+import unittest
+
+
+class Dies(unittest.TestCase):
+    def test_dies(self):
+        raise KeyboardInterrupt  # no Exception: the module ends here
+"""
+
+
+class RunSh(unittest.TestCase):
+    def test_the_summary_names_each_failed_test_and_its_pass(self):
+        # tests/run.sh in a checkout of its own, with the set-up borrowed from
+        # this one and two test modules that fail in every way they can.
+        repo = folder("suite")
+        try:
+            for sub in ("boards", "tests", "lib", "examples", ".venv"):
+                os.mkdir(repo + "/" + sub)
+            ok, out = sh(
+                "cp boards/unix.sh {0}/boards/ && cp tests/run.sh {0}/tests/ && "
+                "cp .ruff.toml .venv/ready {0}/ && mv {0}/ready {0}/.venv/ && "
+                "ln -s {1}/.venv/bin {0}/.venv/bin && "
+                "ln -s {1}/.venv/micropython {0}/.venv/micropython".format(repo, REPO)
+            )
+            self.assertTrue(ok, out)
+            write(repo + "/lib/driver.py", "X = 1\n")
+            write(repo + "/tests/test_mixed.py", MIXED)
+            write(repo + "/tests/test_dies.py", DIES)  # `import os`, unused: style fails too
+            ok, out = sh("unset BUSSERVO_LIB MICROPYPATH; sh %s/tests/run.sh" % repo)
+            self.assertFalse(ok)
+            lines = out.rstrip("\n").split("\n")
+            self.assertEqual(lines[-1], "2 passed, 7 failed", out)
+            self.assertIn("test_mixed: test_good (Mixed) ... ok", lines)  # per-test lines stay
+            last = max(i for i, line in enumerate(lines) if line.startswith("style: ruff"))
+            summary = lines[last + 1 : -1]
+            for words in (
+                ("test_mixed", "test_bad", "(.py)"),
+                ("test_mixed", "test_bad", "(.mpy)"),
+                ("test_mixed", "test_noisy_error", "(.py)"),
+                ("test_mixed", "test_noisy_error", "(.mpy)"),
+                ("test_dies", "test_dies", "(.py)"),
+                ("test_dies", "test_dies", "(.mpy)"),
+                ("style",),
+            ):
+                found = [s for s in summary if all(w in s for w in words)]
+                self.assertEqual(len(found), 1, "%s in %s" % (words, summary))
+            self.assertTrue(len(summary) <= 9, summary)
+        finally:
+            sh("rm -rf " + repo)
+
+
+class Modes(unittest.TestCase):
+    def test_every_script_is_executable(self):
+        for path in ("boards/unix.sh", "boards/simpty.py", "tests/run.sh", ".ci/run"):
+            self.assertTrue(os.stat(path)[0] & 0o100, path + " is not executable")
+
+
+if __name__ == "__main__":
+    unittest.main()
