@@ -1,7 +1,7 @@
 #!/bin/sh
 # The whole test suite: set up the MicroPython unix port (boards/unix.sh), run every
 # tests/test_*.py on it, one process each, first against lib/*.py, then against the .mpy files
-# mpy-cross makes of them; check the style; end with the line "N passed, N failed".
+# mpy-cross makes of them; check the style and the types; end with the line "N passed, N failed".
 # Exits non-zero if any test failed or any module did not run to its end.
 set -u
 cd "$(dirname "$0")/.."
@@ -91,6 +91,17 @@ if .venv/bin/ruff check -q $CODE && .venv/bin/ruff format -q --check $CODE; then
 else
     echo "style: ruff ... FAIL (see above; '.venv/bin/ruff format $CODE')"
     note_failure "style: ruff (see its output above)"
+    failed=$((failed + 1))
+fi
+
+# The examples and board files type-check against the driver's stubs (lib/*.pyi), as a
+# maker's editor sees them: counted as one test.
+if sh tests/typecheck.sh; then
+    echo "types: mypy ... ok"
+    passed=$((passed + 1))
+else
+    echo "types: mypy ... FAIL (see above)"
+    note_failure "types: mypy (see its output above)"
     failed=$((failed + 1))
 fi
 
