@@ -183,13 +183,22 @@ def side_by_side():
     idle = IdleUART()
     now = busservo.BusServo(idle)
     then = busservo_before.BusServo(idle)
-    bare = us_per_call(idle.any)
-    for name, new, old in (
+    # Five rounds, the three taken in turn, and the fastest of each: a busy
+    # machine slows some rounds, never speeds one up.
+    calls = (
         ("move", lambda: now.move(1, 500, 1000), lambda: then.move(1, 500, 1000)),
         ("poll(), idle", now.poll, then.poll),
-    ):
-        new_us = us_per_call(new)
-        old_us = us_per_call(old)
+    )
+    best = {}
+    for _ in range(5):
+        best["any"] = min(best.get("any", 1e9), us_per_call(idle.any))
+        for name, new, old in calls:
+            best[name] = min(best.get(name, 1e9), us_per_call(new))
+            best[name + " before"] = min(best.get(name + " before", 1e9), us_per_call(old))
+    bare = best["any"]
+    for name, _, _ in calls:
+        new_us = best[name]
+        old_us = best[name + " before"]
         rows.append((name, new_us, old_us, new_us / bare, old_us / bare))
     return bare, rows
 
