@@ -1,5 +1,6 @@
 # Shell commands from tests on the unix port, which has os.system() and no subprocess.
 import os
+import sys
 import time
 
 MICROPYTHON = ".venv/bin/micropython"
@@ -48,3 +49,20 @@ def wait_for(path, ms=10000, text=None):
             pass
         time.sleep_ms(20)
     return None
+
+
+def fresh_import(name, **stand_ins):
+    """Import module name afresh, with stand-ins in sys.modules for the modules named
+    (machine=..., termios=...); sys.modules is as it was afterwards."""
+    saved = {key: sys.modules.get(key) for key in list(stand_ins) + [name]}
+    for key, module in stand_ins.items():
+        sys.modules[key] = module
+    sys.modules.pop(name, None)
+    try:
+        return __import__(name)
+    finally:
+        for key, module in saved.items():
+            if module is None:
+                sys.modules.pop(key, None)
+            else:
+                sys.modules[key] = module

@@ -1,7 +1,8 @@
 # Each board file's uart(), with a stand-in machine module that records what
 # it is asked to make, since the unix port has no UART.
-import sys
 import unittest
+
+from shell import fresh_import
 
 
 class StandIn:
@@ -21,19 +22,7 @@ class StandIn:
 
 def load(name, machine, os=None):
     """Import boards/<name>.py afresh against the stand-ins."""
-    saved = {key: sys.modules.get(key) for key in ("machine", "os", name)}
-    sys.modules["machine"] = machine
-    if os:
-        sys.modules["os"] = os
-    sys.modules.pop(name, None)
-    try:
-        return __import__(name)
-    finally:
-        for key, module in saved.items():
-            if module is None:
-                sys.modules.pop(key, None)
-            else:
-                sys.modules[key] = module
+    return fresh_import(name, machine=machine, **({"os": os} if os else {}))
 
 
 class Boards(unittest.TestCase):

@@ -17,6 +17,7 @@ from busservo import (
     CMD_GET_BATTERY_VOLTAGE,
     CMD_MULT_SERVO_POS_READ,
 )
+from test_queries import timed_out
 
 BATTERY_7500 = bytes((0x55, 0x55, 0x04, 0x0F, 0x4C, 0x1D))
 STOP = bytes((0x55, 0x55, 0x02, 0x07))
@@ -28,14 +29,6 @@ def ports():
         w = wire.World(port)
         busservo.time = w.clock
         yield port, w, busservo.BusServo(w.uart)
-
-
-def timed_out(call):
-    try:
-        call()
-    except OSError as e:
-        return e.args[0] == errno.ETIMEDOUT
-    return False
 
 
 def settle(w, bus, ms=200):

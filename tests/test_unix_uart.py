@@ -5,11 +5,10 @@
 # and one that nobody reads (a CPython one-liner: the unix port opens no pty).
 import errno
 import os
-import sys
 import time
 import unittest
 
-from shell import scratch, start, stop, wait_for
+from shell import fresh_import, scratch, start, stop, wait_for
 
 BATTERY = bytes((0x55, 0x55, 0x02, 0x0F))
 BATTERY_7500 = bytes((0x55, 0x55, 0x04, 0x0F, 0x4C, 0x1D))
@@ -109,18 +108,7 @@ class Poll:
 
 def load_unix(termios, select):
     """Import boards/unix.py afresh against the stand-ins."""
-    saved = {key: sys.modules.get(key) for key in ("termios", "select", "unix")}
-    sys.modules["termios"] = termios
-    sys.modules["select"] = select
-    sys.modules.pop("unix", None)
-    try:
-        return __import__("unix")
-    finally:
-        for key, module in saved.items():
-            if module is None:
-                sys.modules.pop(key, None)
-            else:
-                sys.modules[key] = module
+    return fresh_import("unix", termios=termios, select=select)
 
 
 def fds():
