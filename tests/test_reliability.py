@@ -131,6 +131,45 @@ class Wire(unittest.TestCase):
             self.assertEqual(bus.read_positions([3]), {3: 500}, port)
             self.assertEqual(bus.positions[1], 111, port)  # the late reply, as an event
 
+    def test_every_request_in_flight_is_answered_before_a_query_asks(self):
+        for port, w, bus in ports():
+            bus.request_battery()
+            bus.request_battery()
+            w.clock.advance_ms(13)
+            w.sync()  # both requests are in: two replies that say 7500 are on their way
+            w.sim.battery = 7100
+            self.assertEqual(bus.read_battery(), 7100, port)
+
+            bus.request_positions([1])
+            bus.request_positions([1])
+            w.clock.advance_ms(15)
+            w.sync()  # both requests are in: two replies that say 500 are on their way
+            w.sim.write(b"\x55\x55\x08\x03\x01\x00\x00\x01\x20\x03")  # servo 1 to 800
+            self.assertEqual(bus.read_positions([1]), {1: 800}, port)
+
+    def test_a_cut_request_finished_by_the_next_query_is_answered_once(self):
+        w = wire.World("rp2")  # esp32's write() takes a 6-byte frame whole, or waits
+        busservo.time = w.clock
+        bus = busservo.BusServo(w.uart)
+        w.uart.stall(True)  # the transmitter stops: its ring (256) and FIFO (32) fill up
+        bus.unload(list(range(1, 11)))  # 15 bytes
+        for _ in range(27):
+            bus.move(1, 500, 0)  # 270 bytes: 3 left
+        try:
+            bus.request_battery()  # 3 of its 6 bytes go
+            error = None
+        except OSError as e:
+            error = e.args[0]
+        self.assertEqual(error, errno.EIO)
+        w.uart.stall(False)
+        settle(w, bus, 400)  # what the UART held has left
+        self.assertEqual(bus.read_battery(), 7500)  # sends the cut request's rest, then its own
+        w.sim.battery = 7100
+        self.assertEqual(bus.read_battery(), 7100)
+        settle(w, bus, 50)
+        requests = [f for f in w.frames() if f[3] == CMD_GET_BATTERY_VOLTAGE]
+        self.assertEqual((len(requests), w.garbled, w.sim.beeps), (3, 0, 0))
+
     def test_a_position_reply_with_other_ids_is_an_event(self):
         for port, w, bus in ports():
             w.noise(b"\x55\x55\x06\x15\x01\x07\xf4\x01")  # servo 7, unasked
