@@ -170,7 +170,9 @@ class Pictures(unittest.TestCase):
             try:
                 ok, out = sh("%s tests/render_svg.py %s %s" % (PYTHON, svg, png))
                 if out.startswith("no renderer"):
-                    print("\n*** SKIPPED: %s: %s (tests/run.sh installs it) ***" % (svg, out.strip()))
+                    print(
+                        "\n*** SKIPPED: %s: %s (tests/run.sh installs it) ***" % (svg, out.strip())
+                    )
                     raise unittest.SkipTest(out.strip())
                 self.assertTrue(ok, svg + ": " + out)
                 with open(png, "rb") as f:
