@@ -3,6 +3,8 @@
 #
 # Wiring: GPIO17 (TX) to the controller's RX, GPIO16 (RX) to its TX, GND to GND.
 # The servos take their power from the controller's supply, never from the ESP32.
+# GPIO16 is 3.3 V and not 5 V tolerant: if the controller's TX measures about 5 V,
+# put a divider (1k in series, 2k to GND) on it. boards/README.md, wiring-esp32.svg.
 # (UART0 is the REPL's; UART1's default pins are the flash's on most modules.)
 from machine import UART
 

@@ -3,6 +3,8 @@
 #
 # Wiring: GPIO1 (TX) to the controller's RX, GPIO3 (RX) to its TX, GND to GND.
 # The servos take their power from the controller's supply, never from the board.
+# GPIO3 is 3.3 V: if the controller's TX measures about 5 V, put a divider (1k in
+# series, 2k to GND) on it (boards/README.md).
 #
 # The ESP8266 has one full UART, and the REPL uses it (UART1 can only send, on
 # GPIO2). uart() detaches the REPL from UART0 so the driver can have it. The

@@ -4,6 +4,8 @@
 # Wiring: GP0 (pin 1, TX) to the controller's RX, GP1 (pin 2, RX) to its TX, GND
 # (pin 3) to GND. The servos take their power from the controller's supply, never
 # from the Pico. The REPL is on USB, so UART0 is free.
+# GP1 is 3.3 V and not 5 V tolerant: if the controller's TX measures about 5 V, put
+# a divider (1k in series, 2k to GND) on it. boards/README.md and wiring-pico.svg.
 from machine import UART, Pin
 
 

@@ -8,6 +8,8 @@
 #
 # Wiring for an adapter: its TX to the controller's RX, its RX to the
 # controller's TX, GND to GND; the servos take their power from the controller.
+# A 3.3 V adapter's RX wants a divider if the controller's TX measures about 5 V
+# (boards/README.md).
 #
 # An unplugged adapter raises OSError(EIO) from the next call. But a process
 # that leads a session with no terminal (a systemd service, setsid) takes the

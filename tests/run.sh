@@ -16,6 +16,16 @@ if ! command -v socat >/dev/null 2>&1 && command -v apt-get >/dev/null 2>&1; the
         echo "tests/run.sh: could not install socat: the mpremote test will be skipped" >&2
 fi
 
+# resvg-py (a wheel with the resvg renderer compiled in: no system library) lets
+# tests/test_docs.py render the wiring pictures; without it that test skips, saying so.
+RESVG=0.5.0
+have=$(.venv/bin/python -c 'import resvg_py; print(resvg_py.__version__)' 2>/dev/null)
+if [ "$have" != "$RESVG" ]; then
+    echo "tests/run.sh: installing resvg-py $RESVG into .venv/ (to render the wiring pictures)" >&2
+    .venv/bin/pip install --disable-pip-version-check -q "resvg-py==$RESVG" >>.venv/setup.log 2>&1 ||
+        echo "tests/run.sh: could not install resvg-py: the pictures' rendering test will be skipped" >&2
+fi
+
 passed=0
 failed=0
 skipped=0
