@@ -1,5 +1,5 @@
 # Moves nothing: sets action group 1 to half speed, every other group to 100 %, until power-off.
-# What a group then does, at its speed, is for examples/group.py (or your code) to start.
+# Nothing runs until examples/group.py (or your code) starts a group.
 #   mpremote run examples/speed.py
 import busservo
 

@@ -51,16 +51,6 @@ def uart():
 """
 
 
-def write(path, text):
-    with open(path, "w") as f:
-        f.write(text)
-
-
-def read(path):
-    with open(path) as f:
-        return f.read()
-
-
 class Board:
     """A folder with a board.py in it: BOARD, or the text given."""
 
@@ -68,8 +58,15 @@ class Board:
         self.dir = scratch("board")
         self.log = self.dir + "/log"
         os.mkdir(self.dir)
-        write(self.dir + "/board.py", text or BOARD % (self.log, silent))
-        write(self.log, "")
+        self.write("board.py", text or BOARD % (self.log, silent))
+        self.write("log", "")
+
+    def write(self, name, text):
+        """Write the file name in this folder: its path."""
+        path = "%s/%s" % (self.dir, name)
+        with open(path, "w") as f:
+            f.write(text)
+        return path
 
     def run(self, example):
         """Run example (a path) with this board.py on MICROPYPATH: (ok, what it printed)."""
@@ -78,7 +75,9 @@ class Board:
     def commands(self):
         """[(cmd, params)] the controller took, in order."""
         taken = []
-        for line in read(self.log).split("\n"):
+        with open(self.log) as f:
+            lines = f.read().split("\n")
+        for line in lines:
             if line:
                 numbers = [int(x) for x in line.split()]
                 taken.append((numbers[0], numbers[1:]))
@@ -86,10 +85,9 @@ class Board:
 
     def opted_in(self, name):
         """A copy of examples/name in this folder, with the opt-in set True: its path."""
-        text = read("examples/" + name)
-        path = "%s/%s" % (self.dir, name)
-        write(path, text.replace(OPT_IN + " = False", OPT_IN + " = True", 1))
-        return path
+        with open("examples/" + name) as f:
+            text = f.read()
+        return self.write(name, text.replace(OPT_IN + " = False", OPT_IN + " = True", 1))
 
     def remove(self):
         sh("rm -rf " + self.dir)
@@ -103,10 +101,11 @@ class Examples(unittest.TestCase):
     def test_the_first_line_says_what_it_does_to_real_servos(self):
         for name in EXPECT:
             with open("examples/" + name) as f:
-                first = f.readline().rstrip()
+                text = f.read()
+            first = text.split("\n")[0]
             if name in MOVING:
                 self.assertTrue(first.endswith("real servos only once %s = True." % OPT_IN), name)
-                self.assertIn("\n%s = False" % OPT_IN, read("examples/" + name), name)
+                self.assertIn("\n%s = False" % OPT_IN, text, name)
             else:
                 self.assertTrue(first.startswith("# Moves nothing: "), name)
 
