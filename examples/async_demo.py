@@ -1,18 +1,37 @@
-# busservo with asyncio: a control loop keeps its pace while other tasks wait
-# for the controller's answers and for an action group to complete.
+# Moves servos 1 and 2, runs action group 1; real servos only once I_HAVE_CHECKED_MY_ROBOT = True.
+# busservo with asyncio: a control loop keeps its pace while other tasks wait for the
+# controller's answers and for an action group to complete.
 #   mpremote run examples/async_demo.py
 import asyncio
 import time
 
-from busservo import CMD_ACTION_GROUP_COMPLETE
+import busservo
 from busservo_async import AsyncBusServo
+
+# Set True once you have checked that servo 1 can turn to 900 and servo 2 to 100, with nothing
+# in their way, and that your robot has room for action group 1.
+I_HAVE_CHECKED_MY_ROBOT = False
 
 try:
     from board import uart  # your board file: boards/<port>.py, copied as board.py
-except ImportError:
-    from busservo_sim import uart  # no board file: the simulated controller
+except ImportError as e:
+    if "'board'" not in str(e):
+        raise  # board.py is there but fails to import: its error, not the simulator
+    from busservo_sim import uart
 
-bus = AsyncBusServo(uart())
+    print("no board.py found: using the simulated controller, nothing real moves")
+    I_HAVE_CHECKED_MY_ROBOT = True  # nothing real to check
+
+# The controller's events by name: events() gives their command numbers.
+EVENTS = {
+    busservo.CMD_ACTION_GROUP_RUN: "ACTION_GROUP_RUN",
+    busservo.CMD_ACTION_GROUP_STOP: "ACTION_GROUP_STOP",
+    busservo.CMD_ACTION_GROUP_COMPLETE: "ACTION_GROUP_COMPLETE",
+}
+
+port = uart()
+print("talking to", port)
+bus = AsyncBusServo(port)
 loops = 0
 
 
@@ -26,22 +45,28 @@ async def control_loop():
 
 async def listen():
     async for cmd in bus.events():
-        print("  event: command", cmd, "running:", bus.running, "group:", bus.group)
+        print("  event:", EVENTS.get(cmd, cmd), "running:", bus.running, "group:", bus.group)
 
 
 async def main():
+    print("servos 1 and 2 are at", sorted((await bus.read_positions([1, 2])).items()))
+    print("this moves servo 1 to 900 and servo 2 to 100 over 2 s, then runs action group 1")
+    if not I_HAVE_CHECKED_MY_ROBOT:
+        print("nothing moved: check, then set I_HAVE_CHECKED_MY_ROBOT = True (top of this file)")
+        return
+
     asyncio.create_task(control_loop())
     asyncio.create_task(listen())
     start = time.ticks_ms()
     print("battery: %d mV" % await bus.read_battery())
-    bus.move_many([(1, 900), (2, 100)], 1000)
-    await asyncio.sleep_ms(500)
-    print("mid-move:", await bus.read_positions([1, 2]))
+    bus.move_many([(1, 900), (2, 100)], 2000)
+    await asyncio.sleep_ms(1000)
+    print("mid-move:", sorted((await bus.read_positions([1, 2])).items()))
+    await asyncio.sleep_ms(1000)
     bus.run_group(1)
     how = await bus.wait_group_done(timeout_ms=10000)
-    print(
-        "action group", bus.group, "completed" if how == CMD_ACTION_GROUP_COMPLETE else "stopped"
-    )
+    done = "completed" if how == busservo.CMD_ACTION_GROUP_COMPLETE else "stopped"
+    print("action group", bus.group, done)
     await asyncio.sleep_ms(20)  # let the listener print the last event
     took = time.ticks_diff(time.ticks_ms(), start)
     print("the control loop ran %d times in %d ms meanwhile" % (loops, took))

@@ -1,16 +1,39 @@
-# Run an action group (downloaded to the controller beforehand), wait for it to
-# complete with poll(), then run one forever and stop it.
+# Runs action group 1, then 2 until stopped; real servos only once I_HAVE_CHECKED_MY_ROBOT = True.
+# The action groups are the ones downloaded to the controller beforehand; this waits for their
+# events with poll(), which never blocks.
 #   mpremote run examples/group.py
 import time
 
 import busservo
 
+# Set True once you know what action groups 1 and 2 do and your robot has room to do it.
+I_HAVE_CHECKED_MY_ROBOT = False
+
 try:
     from board import uart  # your board file: boards/<port>.py, copied as board.py
-except ImportError:
-    from busservo_sim import uart  # no board file: the simulated controller
+except ImportError as e:
+    if "'board'" not in str(e):
+        raise  # board.py is there but fails to import: its error, not the simulator
+    from busservo_sim import uart
 
-bus = busservo.BusServo(uart())
+    print("no board.py found: using the simulated controller, nothing real moves")
+    I_HAVE_CHECKED_MY_ROBOT = True  # nothing real to check
+
+# The controller's events by name: poll() returns their command numbers.
+EVENTS = {
+    busservo.CMD_ACTION_GROUP_RUN: "ACTION_GROUP_RUN",
+    busservo.CMD_ACTION_GROUP_STOP: "ACTION_GROUP_STOP",
+    busservo.CMD_ACTION_GROUP_COMPLETE: "ACTION_GROUP_COMPLETE",
+}
+
+port = uart()
+print("talking to", port)
+bus = busservo.BusServo(port)
+print("servos 1..6 are at", sorted(bus.read_positions([1, 2, 3, 4, 5, 6]).items()))
+print("this runs action group 1 once, then group 2 over and over, and stops it after 0.5 s")
+if not I_HAVE_CHECKED_MY_ROBOT:
+    print("nothing moved: check, then set I_HAVE_CHECKED_MY_ROBOT = True (top of this file)")
+    raise SystemExit
 
 
 def wait_for(want, timeout_ms=10000):
@@ -18,7 +41,8 @@ def wait_for(want, timeout_ms=10000):
     while time.ticks_diff(time.ticks_ms(), start) < timeout_ms:
         cmd = bus.poll()  # never blocks: do the rest of your loop here
         if cmd is not None:
-            print("frame", cmd, "running:", bus.running, "group:", bus.group, "times:", bus.times)
+            name = EVENTS.get(cmd, cmd)
+            print(name, "running:", bus.running, "group:", bus.group, "times:", bus.times)
         if cmd == want:
             return
         time.sleep_ms(5)

@@ -1,16 +1,32 @@
-# Move one servo: servo 1 to position 800 within 1000 ms, then back to 500.
+# Moves servo 1 to 800, then back to 500; real servos only once I_HAVE_CHECKED_MY_ROBOT = True.
 #   mpremote run examples/move.py
 import time
 
 import busservo
 
+# Set True once you have checked that servo 1 can turn freely, with nothing in its way.
+I_HAVE_CHECKED_MY_ROBOT = False
+
 try:
     from board import uart  # your board file: boards/<port>.py, copied as board.py
-except ImportError:
-    from busservo_sim import uart  # no board file: the simulated controller
+except ImportError as e:
+    if "'board'" not in str(e):
+        raise  # board.py is there but fails to import: its error, not the simulator
+    from busservo_sim import uart
 
-bus = busservo.BusServo(uart())
-bus.move(1, 800, 1000)
-time.sleep_ms(1000)
+    print("no board.py found: using the simulated controller, nothing real moves")
+    I_HAVE_CHECKED_MY_ROBOT = True  # nothing real to check
+
+port = uart()
+print("talking to", port)
+bus = busservo.BusServo(port)
 print("servo 1 is at", bus.read_positions([1])[1])
-bus.move(1, 500, 1000)
+print("this moves it to 800 over 2 s, then back to 500 over 2 s")
+if not I_HAVE_CHECKED_MY_ROBOT:
+    print("nothing moved: check, then set I_HAVE_CHECKED_MY_ROBOT = True (top of this file)")
+    raise SystemExit
+
+bus.move(1, 800, 2000)  # a first move of 2 s gives you time to see it coming
+time.sleep_ms(2000)
+print("servo 1 is at", bus.read_positions([1])[1])
+bus.move(1, 500, 2000)

@@ -1,16 +1,36 @@
-# Move six servos together: one command, one shared time.
+# Moves servos 1..6 to 200..950 and back; real servos only once I_HAVE_CHECKED_MY_ROBOT = True.
 #   mpremote run examples/move_many.py
 import time
 
 import busservo
 
+# Set True once you have checked that servos 1..6 can turn freely, with nothing in their way.
+I_HAVE_CHECKED_MY_ROBOT = False
+
 try:
     from board import uart  # your board file: boards/<port>.py, copied as board.py
-except ImportError:
-    from busservo_sim import uart  # no board file: the simulated controller
+except ImportError as e:
+    if "'board'" not in str(e):
+        raise  # board.py is there but fails to import: its error, not the simulator
+    from busservo_sim import uart
 
-bus = busservo.BusServo(uart())
-bus.move_many([(1, 200), (2, 350), (3, 500), (4, 650), (5, 800), (6, 950)], 1200)
-time.sleep_ms(1200)
-print(bus.read_positions([1, 2, 3, 4, 5, 6]))
-bus.move_many({1: 500, 2: 500, 3: 500, 4: 500, 5: 500, 6: 500}, 1200)  # a dict works too
+    print("no board.py found: using the simulated controller, nothing real moves")
+    I_HAVE_CHECKED_MY_ROBOT = True  # nothing real to check
+
+port = uart()
+print("talking to", port)
+bus = busservo.BusServo(port)
+SERVOS = [1, 2, 3, 4, 5, 6]
+here = bus.read_positions(SERVOS)
+print("servos 1..6 are at", [here[i] for i in SERVOS])
+print("this moves them to 200, 350, 500, 650, 800, 950 together over 2 s, then all to 500")
+if not I_HAVE_CHECKED_MY_ROBOT:
+    print("nothing moved: check, then set I_HAVE_CHECKED_MY_ROBOT = True (top of this file)")
+    raise SystemExit
+
+# One command, one shared time: they all start and arrive together.
+bus.move_many([(1, 200), (2, 350), (3, 500), (4, 650), (5, 800), (6, 950)], 2000)
+time.sleep_ms(2000)
+here = bus.read_positions(SERVOS)
+print("now at", [here[i] for i in SERVOS])
+bus.move_many({1: 500, 2: 500, 3: 500, 4: 500, 5: 500, 6: 500}, 2000)  # a dict works too

@@ -1,14 +1,20 @@
-# Action group speed, in percent: group 1 at 50 %, then every group at 300 %.
-# The controller forgets this at power-off.
+# Moves nothing: sets action group 1 to half speed, every other group to 100 %, until power-off.
+# Nothing runs until examples/group.py (or your code) starts a group.
 #   mpremote run examples/speed.py
 import busservo
 
 try:
     from board import uart  # your board file: boards/<port>.py, copied as board.py
-except ImportError:
-    from busservo_sim import uart  # no board file: the simulated controller
+except ImportError as e:
+    if "'board'" not in str(e):
+        raise  # board.py is there but fails to import: its error, not the simulator
+    from busservo_sim import uart
 
-bus = busservo.BusServo(uart())
-bus.set_group_speed(1, 50)
-bus.set_group_speed(busservo.ALL_GROUPS, 300)
-print("all action groups at 300 %")
+    print("no board.py found: using the simulated controller, nothing real moves")
+
+port = uart()
+print("talking to", port)
+bus = busservo.BusServo(port)
+bus.set_group_speed(busservo.ALL_GROUPS, 100)  # every group at its own pace
+bus.set_group_speed(1, 50)  # then group 1 at half of it: it takes twice as long
+print("action group 1 at 50 %, the others at 100 %, until the controller is switched off")

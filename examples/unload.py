@@ -1,17 +1,35 @@
-# Unload servos 1 to 6: they lose holding torque and turn freely by hand. The
-# next move gives it back. Handy for posing a robot by hand, then reading it.
+# Lets servos 1..6 go limp (an arm falls!); real servos only once I_HAVE_CHECKED_MY_ROBOT = True.
+# Unloaded servos lose their holding torque and turn freely by hand; the next move gives it back.
+# Handy for posing a robot by hand, then reading the pose.
 #   mpremote run examples/unload.py
 import time
 
 import busservo
 
+# Set True once you hold your robot up (or it rests safely): limp servos hold up nothing.
+I_HAVE_CHECKED_MY_ROBOT = False
+
 try:
     from board import uart  # your board file: boards/<port>.py, copied as board.py
-except ImportError:
-    from busservo_sim import uart  # no board file: the simulated controller
+except ImportError as e:
+    if "'board'" not in str(e):
+        raise  # board.py is there but fails to import: its error, not the simulator
+    from busservo_sim import uart
 
-bus = busservo.BusServo(uart())
-bus.unload([1, 2, 3, 4, 5, 6])
+    print("no board.py found: using the simulated controller, nothing real moves")
+    I_HAVE_CHECKED_MY_ROBOT = True  # nothing real to check
+
+port = uart()
+print("talking to", port)
+bus = busservo.BusServo(port)
+SERVOS = [1, 2, 3, 4, 5, 6]
+print("servos 1..6 are at", sorted(bus.read_positions(SERVOS).items()))
+print("this lets them go limp: whatever they hold up falls")
+if not I_HAVE_CHECKED_MY_ROBOT:
+    print("nothing moved: check, then set I_HAVE_CHECKED_MY_ROBOT = True (top of this file)")
+    raise SystemExit
+
+bus.unload(SERVOS)
 print("pose the servos by hand for 3 s...")
 time.sleep_ms(3000)
-print("posed at", bus.read_positions([1, 2, 3, 4, 5, 6]))
+print("posed at", sorted(bus.read_positions(SERVOS).items()))

@@ -8,6 +8,8 @@
 # It decodes what the driver writes and answers as the protocol says:
 # - servos move linearly from where they are to their target over time_ms, so a
 #   position read mid-move gives the value in between (servos start at 500);
+# - a servo turns 0..1000 only: a target beyond 1000 stops at 1000, as a real
+#   servo stops at its limit, and counts one `clamped`;
 # - action groups (`groups`, {group: ms per run}) run `times` times or forever,
 #   sending RUN as they start, COMPLETE as they end, STOP when stopped (by a STOP
 #   command, or by a RUN of another group); a run longer than the ticks can span
@@ -39,6 +41,7 @@ from busservo import (
 SIM_SILENT = 0xF0  # the simulator's own command: Prm 1 = 1 silent, 0 talking
 GROUPS = {0: 1000, 1: 500, 2: 2000, 8: 1500}  # default action groups, ms per run
 CENTER = 500  # where a servo starts
+LIMIT = 1000  # the far end of a servo's range, 0..1000
 # ms a run's end moves at a time: ticks_add() refuses half the ticks' period
 # (2**29 ms on most boards, 2**28 where small ints have 30 bits).
 _SPAN = 1 << 27
@@ -50,6 +53,7 @@ class SimController:
         self.battery = battery
         self.silent = False
         self.beeps = 0
+        self.clamped = 0
         self.limp = set()
         self._ticks_ms = ticks_ms
         self._servos = {}  # id: (from, to, start ticks, time_ms)
@@ -166,13 +170,11 @@ class SimController:
         if cmd == CMD_SERVO_MOVE:
             time_ms = p[1] | p[2] << 8
             for k in range(3, 3 * p[0] + 3, 3):
-                servo_id = p[k]
-                self._servos[servo_id] = (
-                    self.position(servo_id),
-                    p[k + 1] | p[k + 2] << 8,
-                    now,
-                    time_ms,
-                )
+                servo_id, target = p[k], p[k + 1] | p[k + 2] << 8
+                if target > LIMIT:  # the wire carries up to 65535; the servo stops at its end
+                    target = LIMIT
+                    self.clamped += 1
+                self._servos[servo_id] = (self.position(servo_id), target, now, time_ms)
                 self.limp.discard(servo_id)
         elif cmd == CMD_ACTION_GROUP_RUN:
             group, times = p[0], p[1] | p[2] << 8

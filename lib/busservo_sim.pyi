@@ -8,6 +8,8 @@ wired (at a board's REPL, or on the unix port).
 It decodes what the driver writes and answers as the protocol says:
 - servos move linearly from where they are to their target over time_ms, so a position read
   mid-move gives the value in between (servos start at CENTER, 500);
+- a servo turns 0..LIMIT (1000) only: a target beyond it stops at LIMIT, as a real servo
+  stops at its limit, and counts one `clamped`;
 - action groups (`groups`, {group: ms per run}) run `times` times or forever, sending RUN as
   they start, COMPLETE as they end, STOP when stopped (by a STOP command, or by a RUN of
   another group);
@@ -28,6 +30,8 @@ GROUPS: dict[int, int]
 """The default action groups, {group: ms per run}: {0: 1000, 1: 500, 2: 2000, 8: 1500}."""
 CENTER: Final = 500
 """Where a servo starts."""
+LIMIT: Final = 1000
+"""The far end of a servo's range, 0..1000: a move beyond it stops there."""
 
 class SimController:
     """The simulated controller. It is a UART to the driver: busservo.BusServo(SimController())."""
@@ -40,6 +44,8 @@ class SimController:
     """True: it answers nothing at all, as a controller with its TX unplugged."""
     beeps: int
     """Malformed frames seen (the controller's "beep beep")."""
+    clamped: int
+    """Move targets beyond LIMIT, each stopped at LIMIT (a servo turns 0..1000 only)."""
     limp: set[int]
     """The servos unloaded (limp) since they last moved."""
 

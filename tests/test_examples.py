@@ -1,31 +1,215 @@
-# Every example runs on the unix port against the simulated controller (no
-# board.py: the examples fall back to it), exactly as the README runs the demo.
+# Every example runs on the unix port: against the simulated controller when there is no
+# board.py (as the README runs the demo), and against a board.py of the test's own, which stands
+# for a real board. There, an example that moves servos must first say where they are and what
+# it will do, and move nothing until the user sets I_HAVE_CHECKED_MY_ROBOT = True.
 import os
 import unittest
 
-from shell import sh
+from shell import scratch, sh
 
+OPT_IN = "I_HAVE_CHECKED_MY_ROBOT"
+SIMULATED = "no board.py found: using the simulated controller, nothing real moves"
+
+# {example: a line of what it prints when it has done its work}
 EXPECT = {
     "async_demo.py": "action group 1 completed",
     "battery.py": "battery: 7.50 V",
+    "check_wiring.py": "battery: 7.50 V",
     "demo.py": "action group 1 completed",
-    "group.py": "frame 7 running: False group: 2 times: 0",
+    "group.py": "ACTION_GROUP_STOP running: False group: 2 times: 0",
     "move.py": "servo 1 is at 800",
-    "move_many.py": "{",
+    "move_many.py": "now at [200, 350, 500, 650, 800, 950]",
     "positions.py": "servo 6 at 500",
-    "speed.py": "all action groups at 300 %",
+    "speed.py": "action group 1 at 50 %, the others at 100 %",
     "unload.py": "posed at",
 }
 
+# The examples that move servos (or let them go limp); the others move nothing.
+MOVING = ("async_demo.py", "demo.py", "group.py", "move.py", "move_many.py", "unload.py")
+
+# The controller's commands that make servos move (or go limp).
+CMD_SERVO_MOVE = 3
+MOVES = {CMD_SERVO_MOVE: "SERVO_MOVE", 6: "ACTION_GROUP_RUN", 20: "MULT_SERVO_UNLOAD"}
+CMD_ACTION_GROUP_SPEED = 11
+
+# A board.py standing in for a real board: the simulated controller (silent, or not), which
+# logs each command it takes as a line "CMD PARAMS..." (decimal bytes) to a file.
+BOARD = """import busservo_sim
+
+
+class Logged(busservo_sim.SimController):
+    def _do(self, cmd, params):
+        with open(%r, "a") as f:
+            f.write(" ".join(str(b) for b in bytes([cmd]) + params) + "\\n")
+        super()._do(cmd, params)
+
+
+def uart():
+    sim = Logged()
+    sim.silent = %r
+    return sim
+"""
+
+
+class Board:
+    """A folder with a board.py in it: BOARD, or the text given."""
+
+    def __init__(self, text=None, silent=False):
+        self.dir = scratch("board")
+        self.log = self.dir + "/log"
+        os.mkdir(self.dir)
+        self.write("board.py", text or BOARD % (self.log, silent))
+        self.write("log", "")
+
+    def write(self, name, text):
+        """Write the file name in this folder: its path."""
+        path = "%s/%s" % (self.dir, name)
+        with open(path, "w") as f:
+            f.write(text)
+        return path
+
+    def run(self, example):
+        """Run example (a path) with this board.py on MICROPYPATH: (ok, what it printed)."""
+        return sh("MICROPYPATH=%s sh boards/unix.sh %s" % (self.dir, example))
+
+    def commands(self):
+        """[(cmd, params)] the controller took, in order."""
+        taken = []
+        with open(self.log) as f:
+            lines = f.read().split("\n")
+        for line in lines:
+            if line:
+                numbers = [int(x) for x in line.split()]
+                taken.append((numbers[0], numbers[1:]))
+        return taken
+
+    def opted_in(self, name):
+        """A copy of examples/name in this folder, with the opt-in set True: its path."""
+        with open("examples/" + name) as f:
+            text = f.read()
+        return self.write(name, text.replace(OPT_IN + " = False", OPT_IN + " = True", 1))
+
+    def remove(self):
+        sh("rm -rf " + self.dir)
+
 
 class Examples(unittest.TestCase):
-    def test_every_example_runs(self):
+    def test_there_is_a_line_above_for_every_example(self):
         found = sorted(name for name in os.listdir("examples") if name.endswith(".py"))
-        self.assertEqual(found, sorted(EXPECT))  # a new example needs a line above
+        self.assertEqual(found, sorted(EXPECT))
+
+    def test_the_first_line_says_what_it_does_to_real_servos(self):
+        for name in EXPECT:
+            with open("examples/" + name) as f:
+                text = f.read()
+            first = text.split("\n")[0]
+            if name in MOVING:
+                self.assertTrue(first.endswith("real servos only once %s = True." % OPT_IN), name)
+                self.assertIn("\n%s = False" % OPT_IN, text, name)
+            else:
+                self.assertTrue(first.startswith("# Moves nothing: "), name)
+
+    def test_with_no_board_py_each_runs_on_the_simulator_and_says_so_first(self):
         for name, text in EXPECT.items():
             ok, out = sh("sh boards/unix.sh examples/" + name)
             self.assertTrue(ok, name + ": " + out)
+            self.assertEqual(out.split("\n")[0], SIMULATED, name)
             self.assertIn(text, out, name)
+
+    def test_a_board_py_that_fails_to_import_raises_its_own_error(self):
+        # {board.py: what its ImportError says}
+        broken = {
+            "import machine_typo\n": "no module named 'machine_typo'",
+            "from busservo import UART_TYPO\n": "UART_TYPO",
+        }
+        for text, error in broken.items():
+            board = Board(text)
+            try:
+                for name in EXPECT:
+                    ok, out = board.run("examples/" + name)
+                    self.assertFalse(ok, name + ": " + out)
+                    self.assertIn("ImportError: ", out, name)
+                    self.assertIn(error, out, name)
+                    self.assertFalse("simulated" in out, name)
+            finally:
+                board.remove()
+
+    def test_on_a_board_those_that_move_nothing_run_at_once(self):
+        board = Board()
+        try:
+            for name in EXPECT:
+                if name not in MOVING:
+                    ok, out = board.run("examples/" + name)
+                    self.assertTrue(ok, name + ": " + out)
+                    self.assertIn("talking to <Logged object", out.split("\n")[0], name)
+                    self.assertIn(EXPECT[name], out, name)
+            commands = board.commands()
+            self.assertEqual([cmd for cmd, _ in commands if cmd in MOVES], [])
+            for cmd, params in commands:
+                if cmd == CMD_ACTION_GROUP_SPEED:  # no group faster than it was made
+                    self.assertTrue(params[1] | params[2] << 8 <= 100, params)
+        finally:
+            board.remove()
+
+    def test_on_a_board_nothing_moves_until_the_user_opts_in(self):
+        for name in MOVING:
+            board = Board()
+            try:
+                ok, out = board.run("examples/" + name)
+                self.assertTrue(ok, name + ": " + out)
+                self.assertIn("talking to <Logged object", out.split("\n")[0], name)
+                self.assertIn("500", out, name)  # where the servos are, read first
+                self.assertIn("this ", out, name)  # what it would do
+                self.assertIn("nothing moved", out, name)
+                self.assertIn("set %s = True" % OPT_IN, out, name)  # how to opt in
+                self.assertFalse(EXPECT[name] in out, name)
+                taken = [MOVES[cmd] for cmd, _ in board.commands() if cmd in MOVES]
+                self.assertEqual(taken, [], name)
+            finally:
+                board.remove()
+
+    def test_on_a_board_with_the_opt_in_moves_take_2_s_or_more(self):
+        for name in MOVING:
+            board = Board()
+            try:
+                ok, out = board.run(board.opted_in(name))
+                self.assertTrue(ok, name + ": " + out)
+                self.assertIn(EXPECT[name], out, name)
+                self.assertFalse("nothing moved" in out, name)
+                commands = board.commands()
+                self.assertTrue([cmd for cmd, _ in commands if cmd in MOVES], name)
+                for cmd, params in commands:
+                    if cmd == CMD_SERVO_MOVE:
+                        self.assertTrue(params[1] | params[2] << 8 >= 2000, (name, params))
+            finally:
+                board.remove()
+
+    def test_check_wiring_times_the_battery_round_trip(self):
+        ok, out = sh("sh boards/unix.sh examples/check_wiring.py")
+        self.assertTrue(ok, out)
+        for text in ("battery: 7.50 V", "round trip: ", "noise: 0 bytes"):
+            self.assertIn(text, out)
+        self.assertFalse("likely causes" in out)
+
+    def test_check_wiring_lists_the_likely_causes_of_silence_in_order(self):
+        board = Board(silent=True)
+        try:
+            ok, out = board.run("examples/check_wiring.py")
+        finally:
+            board.remove()
+        self.assertTrue(ok, out)
+        self.assertIn("no answer from the controller within 100 ms", out)
+        causes = (
+            "1. TX and RX swapped",
+            "2. no common ground",
+            "3. the controller is unpowered",
+            "4. the wrong baud rate",
+            "5. the wrong UART pins in board.py",
+            "6. a 5 V controller TX on a 3.3 V RX pin",
+        )
+        at = [out.find(cause) for cause in causes]
+        self.assertTrue(-1 not in at and at == sorted(at), out)
+        self.assertFalse("battery:" in out)
 
 
 if __name__ == "__main__":

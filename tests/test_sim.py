@@ -82,6 +82,14 @@ class Simulator(unittest.TestCase):
         self.bus.move(4, 42, 0)
         self.assertEqual(self.sim.position(4), 42)
 
+    def test_a_target_beyond_1000_stops_at_1000_and_is_counted(self):
+        # The wire carries 0..65535; a servo turns 0..1000 and stops at its end.
+        self.bus.move_many([(1, 1001), (2, 65535), (3, 1000)], 0)
+        self.assertEqual(self.bus.read_positions([1, 2, 3]), {1: 1000, 2: 1000, 3: 1000})
+        self.assertEqual(self.sim.clamped, 2)
+        self.bus.move(1, 0, 0)
+        self.assertEqual((self.sim.position(1), self.sim.clamped), (0, 2))
+
     def test_a_group_runs_then_completes(self):
         self.bus.run_group(8, 2)
         self.assertEqual(events(self.bus), [CMD_ACTION_GROUP_RUN])

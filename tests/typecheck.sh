@@ -39,11 +39,6 @@ disable_error_code = attr-defined
 # boards/unix.py: MicroPython's files take write(buf, off, n); CPython's take write(buf).
 [mypy-unix]
 disable_error_code = call-arg
-
-# examples/battery.py divides bus.battery (int | None: None until a reply has come) after
-# poll() has returned the reply. Remove this once the example narrows it itself.
-[mypy-battery]
-disable_error_code = operator
 INI
 
 MYPYPATH=lib:boards:tests/stubs $VENV/bin/python -m mypy --config-file "$CONFIG" \
