@@ -72,8 +72,8 @@ def _count(name, items, high):
 class BusServo:
     def __init__(self, uart, baudrate=9600):
         _check("baudrate", baudrate, 1200, 1000000)
-        if not hasattr(uart, "readinto"):  # a path, say
-            raise TypeError("uart must be a UART, got %r (boards/unix.py opens paths)" % (uart,))
+        if not hasattr(uart, "readinto"):  # a path, say: boards/unix.py opens one
+            raise TypeError("uart needs any/readinto/write, got %r (see boards/unix.py)" % (uart,))
         self._uart = uart
         self._write = uart.write  # one lookup, not two, per command
         self._any = uart.any
@@ -83,8 +83,8 @@ class BusServo:
         self._idle = time.ticks_ms()
         self._frac = 0
         self._cut_at = 0  # bytes of it sent (0: nothing is cut)
-        self._tx = bytearray(_FRAME_MAX)
-        self._tx[0] = self._tx[1] = _HEADER  # reading never uses tx: it stays
+        tx = self._tx = bytearray(_FRAME_MAX)
+        tx[0] = tx[1] = _HEADER  # reading never uses tx: it stays
         # move() is the call a control loop makes most: it has a frame of its
         # own, with the header, Length, command and count already in place.
         self._move = bytearray((_HEADER, _HEADER, 8, CMD_SERVO_MOVE, 1, 0, 0, 0, 0, 0))
@@ -299,7 +299,7 @@ class BusServo:
                 self._sent(took)
                 at += took
             elif time.ticks_diff(time.ticks_ms(), deadline) >= 0:
-                raise OSError(errno.EIO, "UART took %d of %d bytes" % (at, end))
+                raise OSError(errno.EIO, "%d of %d bytes sent" % (at, end))
             else:
                 time.sleep_us(self._byte_us)  # room comes a byte at a time
         self._cut_at = 0

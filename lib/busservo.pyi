@@ -95,8 +95,8 @@ class BusServo:
         baudrate (1200..1000000) is the UART's: a byte takes 10 bits (1.04 ms at 9600
         baud), so the driver knows when what it wrote will have left the wire. It does not
         set the UART's rate. Raises ValueError or TypeError for a bad baudrate, and
-        TypeError for a uart that is no UART (a path: boards/unix.py's uart(path) opens one
-        on the unix port)."""
+        TypeError for a uart without any(), readinto() and write() (a path, say:
+        boards/unix.py's uart(path) opens one on the unix port)."""
     # Commands. Each checks all its arguments before it writes anything.
     def move(self, servo_id: int, position: int, time_ms: int) -> None:
         """CMD_SERVO_MOVE: move one servo to position within time_ms.
