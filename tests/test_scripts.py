@@ -323,6 +323,18 @@ class Dies(unittest.TestCase):
 """
 
 
+FINE = """import unittest
+
+
+class Fine(unittest.TestCase):
+    def test_one(self):
+        pass
+
+    def test_two(self):
+        pass
+"""
+
+
 class RunSh(unittest.TestCase):
     def test_the_summary_names_each_failed_test_and_its_pass(self):
         # tests/run.sh in a checkout of its own, with the set-up borrowed from
@@ -342,11 +354,15 @@ class RunSh(unittest.TestCase):
             write(repo + "/tests/typecheck.sh", "exit 0\n")  # the types: not what is tested
             write(repo + "/tests/test_mixed.py", MIXED)
             write(repo + "/tests/test_dies.py", DIES)  # `import os`, unused: style fails too
+            write(repo + "/tests/test_fine.py", FINE)
             ok, out = sh("unset BUSSERVO_LIB MICROPYPATH; sh %s/tests/run.sh" % repo)
             self.assertFalse(ok)
             lines = out.rstrip("\n").split("\n")
-            self.assertEqual(lines[-1], "3 passed, 7 failed", out)
-            self.assertIn("test_mixed: test_good (Mixed) ... ok", lines)  # per-test lines stay
+            self.assertEqual(lines[-1], "7 passed, 7 failed", out)
+            self.assertIn("test_mixed: test_good (Mixed) ... ok", lines)  # a failed module: all
+            self.assertIn("test_fine: 2 passed", lines)  # a module that passed: one line
+            self.assertIn("test_fine (.mpy): 2 passed", lines)
+            self.assertFalse("test_fine: test_one (Fine) ... ok" in lines)
             last = max(i for i, line in enumerate(lines) if line.startswith("types: mypy"))
             summary = lines[last + 1 : -1]
             for words in (
@@ -361,6 +377,8 @@ class RunSh(unittest.TestCase):
                 found = [s for s in summary if all(w in s for w in words)]
                 self.assertEqual(len(found), 1, "%s in %s" % (words, summary))
             self.assertTrue(len(summary) <= 9, summary)
+            ok, out = sh("unset BUSSERVO_LIB MICROPYPATH; sh %s/tests/run.sh -v" % repo)
+            self.assertIn("test_fine: test_one (Fine) ... ok", out.split("\n"))  # -v: every test
         finally:
             sh("rm -rf " + repo)
 
