@@ -28,8 +28,9 @@ BUS = "BUS"  # a bus servo: positions 0..1000 over 240 degrees
 PWM_180 = "PWM_180"  # a PWM servo on an LSC board: 500..2500 us over 180 degrees
 PWM_270 = "PWM_270"  # the same over 270 degrees
 
-# kind: (centre position, positions per 2 * half degrees, half: degrees each side)
-_KINDS = {BUS: (500, 1000, 120), PWM_180: (1500, 2000, 90), PWM_270: (1500, 2000, 135)}
+# kind: (centre position, num, den, half): num / den positions per degree, half
+# the degrees each side of the centre.
+_KINDS = {BUS: (500, 25, 6, 120), PWM_180: (1500, 100, 9, 90), PWM_270: (1500, 200, 27, 135)}
 
 _Q = const(10)  # positions are computed in 1/1024ths, then rounded
 _MS_MAX = const(65535)  # a move's time on the wire: 16 bits
@@ -84,7 +85,7 @@ class Joint:
             raise TypeError("direction must be 1 or -1, got %r" % (direction,))
         if direction != 1 and direction != -1:
             raise ValueError("direction must be 1 or -1, got %r" % (direction,))
-        centre, span, half = _KINDS[kind]
+        centre, num, den, half = _KINDS[kind]
         _number("trim", trim, -half, half)
         # The degrees the servo can reach, with this direction and trim.
         low = -half - trim if direction > 0 else trim - half
@@ -99,7 +100,7 @@ class Joint:
         _number("limits", hi)
         if not low <= lo <= hi <= high:
             raise ValueError(
-                "limits must be low <= high within %s..%s degrees (%s, trim %s), got %r"
+                "limits must be low <= high within %g..%g degrees (%s, trim %g), got %r"
                 % (low, high, kind, trim, limits)
             )
         if dps is not None:
@@ -112,10 +113,11 @@ class Joint:
         self.lo = lo
         self.hi = hi
         self.dps = dps
-        self.per_degree = span / (2 * half)  # positions per degree
+        self.per_degree = num / den  # positions per degree
         self.centre = centre
-        # In 1/1024ths of a position: position = (_c + _k * degrees) / 1024.
-        self._k = round(direction * self.per_degree * (1 << _Q))
+        # In 1/1024ths of a position: (_c + degrees * _num * 1024 / _den) / 1024.
+        self._num = direction * num
+        self._den = den
         self._c = round((centre + trim * self.per_degree) * (1 << _Q))
         # The joint's dps in positions per second (0: none), for the stream.
         self._pps = 0 if dps is None else max(1, int(dps * self.per_degree))
@@ -128,15 +130,17 @@ class Joint:
         elif degrees > self.hi:
             degrees = self.hi
         if _type(degrees) is _int:
-            q = degrees * self._k
+            q = (degrees * self._num << _Q) // self._den
         else:
-            # degrees * k without a float: the float's sign, exponent and top 16
-            # bits of its significand m (1.0 <= m / 2**15 < 2), so that degrees =
-            # m * 2**(e - 142). |degrees| < 512, so the shift is to the right.
+            # The same without a float: from the float's sign, exponent e and the
+            # top 22 bits of its significand m (1 <= m / 2**21 < 2), degrees =
+            # m * 2**(e - 148). |degrees| < 512, so the shift is to the right, and
+            # m * num < 2**30 stays a small int on a 32-bit port.
             pack_into("<f", _bits, 0, degrees)
             b = _bits
-            shift = 142 - ((b[3] & 0x7F) << 1 | b[2] >> 7)
-            q = 0 if shift > 40 else (((b[2] | 0x80) << 8 | b[1]) * self._k) >> shift
+            shift = 148 - _Q - ((b[3] & 0x7F) << 1 | b[2] >> 7)
+            m = ((b[2] | 0x80) << 16 | b[1] << 8 | b[0]) >> 2
+            q = 0 if shift > 40 else ((m * self._num) >> shift) // self._den
             if b[3] & 0x80:
                 q = -q
         return (self._c + q + (1 << (_Q - 1))) >> _Q
@@ -195,7 +199,8 @@ class Robot:
         self._fresh = False  # targets not yet sent
         now = time.ticks_ms()
         self._given = self._given_before = self._stepped = now
-        self.frame_ms = 0  # the last stream frame's time on the wire (0: none yet)
+        self.frame_ms = 0  # a stream frame's time on the wire, in ms (0: none sent yet)
+        self._frame_n = 0  # the joints in the frame it was measured on
         self.updates = 0  # stream frames sent
 
     # Calibration.
@@ -417,8 +422,13 @@ class Robot:
             self.slowed += 1
         self._fresh = fresh
         self.updates += 1
+        # The frame's time on the wire, as wire_ms() grew (whole ms: the most seen).
         sent = self.bus.wire_ms() - ahead
-        self.frame_ms = sent if sent > 0 else 1
+        if len(live) != self._frame_n:
+            self._frame_n = len(live)
+            self.frame_ms = 0
+        if sent > self.frame_ms:
+            self.frame_ms = sent
         return True
 
     def _stop_stream(self):
