@@ -40,7 +40,7 @@ _LATE_MS = const(50)  # a player's step this late starts its timing afresh
 _INF = float("inf")
 _NINF = float("-inf")
 
-asyncio = None  # imported by the first Player.run(): many robots never need it
+_asyncio = None  # imported by the first Player.run(): many robots never need it
 _bits = bytearray(4)  # a float's bits, for Joint.position()
 _type = type
 _int = int
@@ -205,8 +205,8 @@ class Robot:
 
     # Calibration.
 
-    @classmethod
-    def load(cls, bus, path):
+    @staticmethod
+    def load(bus, path):
         """A Robot on bus with the joints that save() wrote to path."""
         with open(path) as f:
             config = json.load(f)
@@ -216,7 +216,7 @@ class Robot:
                 joints[name] = Joint(**settings)
             except TypeError as e:
                 raise TypeError("%s: joint %r: %s" % (path, name, e))
-        return cls(bus, joints)
+        return Robot(bus, joints)
 
     def save(self, path):
         """Write the joints' calibration to path as JSON (Robot.load() reads it)."""
@@ -474,11 +474,12 @@ class Sequence:
         with open(path, "w") as f:
             json.dump({"steps": [{"ms": ms, "pose": pose} for pose, ms in self.steps]}, f)
 
-    @classmethod
-    def load(cls, path):
+    @staticmethod
+    def load(path):
+        """The sequence that save() wrote to path."""
         with open(path) as f:
             steps = json.load(f)["steps"]
-        return cls((step["pose"], step["ms"]) for step in steps)
+        return Sequence((step["pose"], step["ms"]) for step in steps)
 
     def play(self, robot, speed=1.0, loop=False):
         """A Player of this sequence on robot: call its step() from a loop, or
@@ -540,16 +541,16 @@ class Player:
 
     async def run(self, poll_ms=10):
         """Play to the end (for ever with loop, until stop()), sleeping between poses."""
-        global asyncio
-        if asyncio is None:
-            import asyncio
+        global _asyncio
+        if _asyncio is None:
+            import asyncio as _asyncio
         while not self.done:
             self.step()
             if not self.done:
                 wait = poll_ms
                 if self._due is not None:
                     wait = min(wait, max(0, time.ticks_diff(self._due, time.ticks_ms())))
-                await asyncio.sleep_ms(wait)
+                await _asyncio.sleep_ms(wait)
 
     def __await__(self):
         return self.run()

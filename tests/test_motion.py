@@ -3,7 +3,6 @@
 # UART models, the simulated controller). The driver and the motion layer both run on the
 # world's clock: busservo.time = busservo_motion.time = w.clock.
 import asyncio
-import gc
 import math
 import os
 import time
@@ -12,10 +11,10 @@ import unittest
 import busservo
 import busservo_motion as bm
 import wire
-from shell import scratch
 from busservo import CMD_ACTION_GROUP_STOP, CMD_MULT_SERVO_POS_READ, CMD_MULT_SERVO_UNLOAD
 from busservo import CMD_SERVO_MOVE as MOVE
 from fakeuart import FakeUART
+from shell import scratch
 from test_alloc import heap_per_call
 
 
@@ -89,7 +88,7 @@ def raises(call, *words):
 class Tidy(unittest.TestCase):
     def tearDown(self):
         busservo.time = bm.time = time
-        bm.asyncio = None
+        bm._asyncio = None
 
 
 class Calibration(Tidy):
@@ -507,13 +506,13 @@ class Sequences(Tidy):
 
         w, bus = world()
         a = arm(bus)
-        bm.asyncio = SimAsyncio(w)
+        bm._asyncio = SimAsyncio(w)
         ticks = []
 
         async def control_loop():
             while True:
                 ticks.append(w.clock.now_us)
-                await bm.asyncio.sleep_ms(10)
+                await bm._asyncio.sleep_ms(10)
 
         async def main():
             asyncio.create_task(control_loop())
