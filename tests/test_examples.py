@@ -12,8 +12,11 @@ EXPECT = {
     "group.py": "frame 7 running: False group: 2 times: 0",
     "move.py": "servo 1 is at 800",
     "move_many.py": "{",
+    "playback.py": "estop: group stopped, joints limp",
     "positions.py": "servo 6 at 500",
     "speed.py": "all action groups at 300 %",
+    "stream.py": "updates/s (the wire's limit for 6 servos: 38.4)",
+    "teach.py": "played back 3 poses",
     "unload.py": "posed at",
 }
 
