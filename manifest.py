@@ -1,15 +1,17 @@
 # For firmware with busservo frozen in: add to your board's manifest
 #     include("path/to/busservo/manifest.py")
-# or, with the simulated controller and the asyncio interface too,
-#     include("path/to/busservo/manifest.py", sim=True, asyncio=True)
+# or, with the simulated controller, the asyncio interface and the motion layer too,
+#     include("path/to/busservo/manifest.py", sim=True, asyncio=True, motion=True)
 metadata(
     description="Driver for the serial Bus Servo Controller (LOBOT/Hiwonder, 0x55 0x55 frames).",
     version="0.1.0",
 )
-options.defaults(sim=False, asyncio=False)
+options.defaults(sim=False, asyncio=False, motion=False)
 
 module("busservo.py", base_path="lib")
 if options.sim:
     module("busservo_sim.py", base_path="lib")
 if options.asyncio:
     module("busservo_async.py", base_path="lib")
+if options.motion:
+    module("busservo_motion.py", base_path="lib")

@@ -19,8 +19,11 @@ EXPECT = {
     "group.py": "ACTION_GROUP_STOP running: False group: 2 times: 0",
     "move.py": "servo 1 is at 800",
     "move_many.py": "now at [200, 350, 500, 650, 800, 950]",
+    "playback.py": "estop: group stopped, joints limp",
     "positions.py": "servo 6 at 500",
     "speed.py": "action group 1 at 50 %, the others at 100 %",
+    "stream.py": "updates/s (the wire's limit for 6 servos: 38.4)",
+    "teach.py": "played back 3 poses",
     "unload.py": "posed at",
 }
 

@@ -141,9 +141,15 @@ class Manifest(unittest.TestCase):
     def test_the_manifest_freezes_files_that_exist(self):
         named, meta = self.run_manifest()
         self.assertEqual(named, ["lib/busservo.py"])
-        named, meta = self.run_manifest(sim=True, asyncio=True)
+        named, meta = self.run_manifest(sim=True, asyncio=True, motion=True)
         self.assertEqual(
-            named, ["lib/busservo.py", "lib/busservo_sim.py", "lib/busservo_async.py"]
+            named,
+            [
+                "lib/busservo.py",
+                "lib/busservo_sim.py",
+                "lib/busservo_async.py",
+                "lib/busservo_motion.py",
+            ],
         )
         for path in named:
             os.stat(path)

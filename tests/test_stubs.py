@@ -8,9 +8,10 @@ import unittest
 
 import busservo
 import busservo_async
+import busservo_motion
 import busservo_sim
 
-MODULES = (busservo, busservo_async, busservo_sim)
+MODULES = (busservo, busservo_async, busservo_sim, busservo_motion)
 
 # AsyncBusServo.__getattr__ forwards to its BusServo: its stub declares what it forwards, with
 # the signatures of BusServo's methods. {class: (the module, the class it forwards to)}
@@ -28,10 +29,16 @@ def instances():
     """An instance of each public class, to see its attributes."""
     sim = busservo_sim.SimController()
     bus = busservo.BusServo(sim)
+    robot = busservo_motion.Robot(bus, {"base": busservo_motion.Joint(1)})
+    sequence = busservo_motion.Sequence([({"base": 10}, 100)])
     return {
         "BusServo": bus,
         "AsyncBusServo": busservo_async.AsyncBusServo(bus),
         "SimController": sim,
+        "Joint": robot.joints["base"],
+        "Robot": robot,
+        "Sequence": sequence,
+        "Player": sequence.play(robot),
     }
 
 

@@ -1,0 +1,558 @@
+# busservo_motion: joints in degrees, poses taught by hand, and motion at the
+# wire's limit, on top of busservo.BusServo.
+#
+#   import busservo, busservo_motion as bm
+#   arm = bm.Robot(busservo.BusServo(uart), {
+#       "base": bm.Joint(1),                                  # a bus servo
+#       "shoulder": bm.Joint(2, direction=-1, trim=3.5, limits=(-90, 90)),
+#       "claw": bm.Joint(6, kind=bm.PWM_180, limits=(0, 60)), # a PWM servo
+#   })
+#   arm.move({"base": 30, "shoulder": -45}, ms=500)
+#   arm.stream({"base": x}); arm.step()                  # from a control loop
+#
+# Degrees are the joint's, 0 at the servo's centre (position 500 for a bus
+# servo, 1500 us for a PWM servo), positive in the servo's own direction times
+# `direction`. A joint's servo turns to direction * degrees + trim.
+#
+# The stream path (stream() and step()) allocates nothing: its buffers are made
+# once, in Robot(). Floats are heap objects on most ports, so it does not
+# multiply them: it reads a float's bits (struct.pack_into) and scales them with
+# small ints (Joint.position()).
+import json
+import math
+import time
+from micropython import const
+from struct import pack_into
+
+BUS = "BUS"  # a bus servo: positions 0..1000 over 240 degrees
+PWM_180 = "PWM_180"  # a PWM servo on an LSC board: 500..2500 us over 180 degrees
+PWM_270 = "PWM_270"  # the same over 270 degrees
+
+# kind: (centre position, num, den, half): num / den positions per degree, half
+# the degrees each side of the centre.
+_KINDS = {BUS: (500, 25, 6, 120), PWM_180: (1500, 100, 9, 90), PWM_270: (1500, 200, 27, 135)}
+
+_Q = const(10)  # positions are computed in 1/1024ths, then rounded
+_MS_MAX = const(65535)  # a move's time on the wire: 16 bits
+_SERVOS_MAX = const(83)  # servos one CMD_SERVO_MOVE can carry
+_GAP_MS = const(1000)  # stream() calls further apart than this are no stream
+_LATE_MS = const(50)  # a player's step this late starts its timing afresh
+_INF = float("inf")
+_NINF = float("-inf")
+
+_asyncio = None  # imported by the first Player.run(): many robots never need it
+_bits = bytearray(4)  # a float's bits, for Joint.position()
+_type = type
+_int = int
+_float = float
+
+
+def _number(name, value, low=_NINF, high=_INF):
+    # A finite int or float in low..high, or raise naming it, the range and what came.
+    t = _type(value)
+    if t is not _int and t is not _float:
+        raise TypeError("%s must be a number, got %r" % (name, value))
+    if not low <= value <= high or not _NINF < value < _INF:
+        if low == _NINF and high == _INF:
+            raise ValueError("%s must be a finite number, got %r" % (name, value))
+        raise ValueError("%s must be in %s..%s, got %r" % (name, low, high, value))
+    return value
+
+
+def _dps(dps):
+    _number("dps", dps, 0)
+    if not dps:
+        raise ValueError("dps must be more than 0 degrees/s, got %r" % (dps,))
+
+
+def _ms(name, value):
+    if _type(value) is not _int:
+        raise TypeError("%s must be an int in 0..%d ms, got %r" % (name, _MS_MAX, value))
+    if not 0 <= value <= _MS_MAX:
+        raise ValueError("%s must be in 0..%d ms, got %r" % (name, _MS_MAX, value))
+    return value
+
+
+class Joint:
+    def __init__(self, servo_id, kind=BUS, direction=1, trim=0.0, limits=None, dps=None):
+        if _type(servo_id) is not _int:
+            raise TypeError("servo_id must be an int in 0..255, got %r" % (servo_id,))
+        if not 0 <= servo_id <= 255:
+            raise ValueError("servo_id must be in 0..255, got %r" % (servo_id,))
+        if kind not in _KINDS:
+            raise ValueError("kind must be BUS, PWM_180 or PWM_270, got %r" % (kind,))
+        if _type(direction) is not _int:
+            raise TypeError("direction must be 1 or -1, got %r" % (direction,))
+        if direction != 1 and direction != -1:
+            raise ValueError("direction must be 1 or -1, got %r" % (direction,))
+        centre, num, den, half = _KINDS[kind]
+        _number("trim", trim, -half, half)
+        # The degrees the servo can reach, with this direction and trim.
+        low = -half - trim if direction > 0 else trim - half
+        high = half - trim if direction > 0 else trim + half
+        if limits is None:
+            limits = (low, high)
+        try:
+            lo, hi = limits
+        except (TypeError, ValueError):
+            raise TypeError("limits must be (low, high) in degrees, got %r" % (limits,))
+        _number("limits", lo)
+        _number("limits", hi)
+        if not low <= lo <= hi <= high:
+            raise ValueError(
+                "limits must be low <= high within %g..%g degrees (%s, trim %g), got %r"
+                % (low, high, kind, trim, limits)
+            )
+        if dps is not None:
+            _dps(dps)
+        self.servo_id = servo_id
+        self.kind = kind
+        self.direction = direction
+        self.trim = trim
+        self.limits = (lo, hi)
+        self.lo = lo
+        self.hi = hi
+        self.dps = dps
+        self.per_degree = num / den  # positions per degree
+        self.centre = centre
+        # In 1/1024ths of a position: (_c + degrees * _num * 1024 / _den) / 1024.
+        self._num = direction * num
+        self._den = den
+        self._c = round((centre + trim * self.per_degree) * (1 << _Q))
+        # The joint's dps in positions per second (0: none), for the stream.
+        self._pps = 0 if dps is None else max(1, int(dps * self.per_degree))
+
+    def position(self, degrees):
+        """The position for degrees (an int or float), clamped to the limits.
+        Allocates nothing."""
+        if degrees < self.lo:
+            degrees = self.lo
+        elif degrees > self.hi:
+            degrees = self.hi
+        if _type(degrees) is _int:
+            q = (degrees * self._num << _Q) // self._den
+        else:
+            # The same without a float: from the float's sign, exponent e and the
+            # top 22 bits of its significand m (1 <= m / 2**21 < 2), degrees =
+            # m * 2**(e - 148). |degrees| < 512, so the shift is to the right, and
+            # m * num < 2**30 stays a small int on a 32-bit port.
+            pack_into("<f", _bits, 0, degrees)
+            b = _bits
+            shift = 148 - _Q - ((b[3] & 0x7F) << 1 | b[2] >> 7)
+            m = ((b[2] | 0x80) << 16 | b[1] << 8 | b[0]) >> 2
+            q = 0 if shift > 40 else ((m * self._num) >> shift) // self._den
+            if b[3] & 0x80:
+                q = -q
+        return (self._c + q + (1 << (_Q - 1))) >> _Q
+
+    def degrees(self, position):
+        """The joint's angle in degrees at position (not clamped)."""
+        return self.direction * ((position - self.centre) / self.per_degree - self.trim)
+
+    def config(self):
+        """The joint's settings: Joint(**joint.config()) makes it again."""
+        return {
+            "servo_id": self.servo_id,
+            "kind": self.kind,
+            "direction": self.direction,
+            "trim": self.trim,
+            "limits": list(self.limits),
+            "dps": self.dps,
+        }
+
+
+class Robot:
+    def __init__(self, bus, joints):
+        if _type(joints) is not dict:
+            raise TypeError("joints must be a dict {name: Joint}, got %r" % (joints,))
+        if not 1 <= len(joints) <= _SERVOS_MAX:
+            raise ValueError("joints must hold 1..%d joints, got %d" % (_SERVOS_MAX, len(joints)))
+        seen = {}
+        for name, joint in joints.items():
+            if _type(name) is not str or not isinstance(joint, Joint):
+                raise TypeError("joints must be {name: Joint}, got %r: %r" % (name, joint))
+            other = seen.get(joint.servo_id)
+            if other is not None:
+                raise ValueError(
+                    "joints %r and %r share servo_id %d" % (other, name, joint.servo_id)
+                )
+            seen[joint.servo_id] = name
+        self.bus = bus
+        self.joints = joints
+        self.names = sorted(joints, key=lambda name: joints[name].servo_id)
+        n = len(self.names)
+        self._joints = [joints[name] for name in self.names]
+        self._index = {name: i for i, name in enumerate(self.names)}
+        self._ids = [joint.servo_id for joint in self._joints]
+        self._at = [None] * n  # each joint's position as last read or commanded
+        self.clamped = 0  # targets clamped to a joint's limits
+        self.slowed = 0  # moves and stream frames slowed to a joint's dps
+        self.player = None  # the Player playing on this robot, if any
+        # The stream: each joint's latest target, the [id, position] pairs that
+        # step() sends (those of the joints streamed to), and the pace.
+        self._goal = [0] * n
+        self._tmp = [0] * n
+        self._pairs = [[joint.servo_id, 0] for joint in self._joints]
+        self._live = []  # pairs of the joints in the stream, in the order they came
+        self._live_i = []  # their joints' indices
+        self._in = bytearray(n)  # 1: the joint is in the stream
+        self._fresh = False  # targets not yet sent
+        now = time.ticks_ms()
+        self._given = self._given_before = self._stepped = now
+        self.frame_ms = 0  # a stream frame's time on the wire, in ms (0: none sent yet)
+        self._frame_n = 0  # the joints in the frame it was measured on
+        self.updates = 0  # stream frames sent
+
+    # Calibration.
+
+    @staticmethod
+    def load(bus, path):
+        """A Robot on bus with the joints that save() wrote to path."""
+        with open(path) as f:
+            config = json.load(f)
+        joints = {}
+        for name, settings in config["joints"].items():
+            try:
+                joints[name] = Joint(**settings)
+            except TypeError as e:
+                raise TypeError("%s: joint %r: %s" % (path, name, e))
+        return Robot(bus, joints)
+
+    def save(self, path):
+        """Write the joints' calibration to path as JSON (Robot.load() reads it)."""
+        config = {"joints": {name: self.joints[name].config() for name in self.names}}
+        with open(path, "w") as f:
+            json.dump(config, f)
+
+    def _i(self, name):
+        i = self._index.get(name) if _type(name) is str else None
+        if i is None:
+            raise ValueError("no joint %r: the joints are %s" % (name, ", ".join(self.names)))
+        return i
+
+    def _targets(self, targets):
+        # {index: position} of a pose {name: degrees}, all checked; counts clamps.
+        if _type(targets) is not dict or not targets:
+            raise TypeError("targets must be a dict {joint name: degrees}, got %r" % (targets,))
+        out = {}
+        clamped = 0
+        for name, degrees in targets.items():
+            i = self._i(name)
+            _number("targets[%r]" % name, degrees)
+            joint = self._joints[i]
+            clamped += not joint.lo <= degrees <= joint.hi
+            out[i] = joint.position(degrees)
+        return out, clamped
+
+    def _read(self, indices):
+        # Read positions of these joints into _at.
+        got = self.bus.read_positions([self._ids[i] for i in indices])
+        for i in indices:
+            self._at[i] = got[self._ids[i]]
+
+    # Moves.
+
+    def move(self, targets, ms=None, dps=None):
+        """Move joints {name: degrees} together in one frame, within ms, or at dps
+        (degrees per second) for the joint that goes furthest. Return the move's
+        time in ms (longer than asked if a joint's own dps needed it)."""
+        if (ms is None) == (dps is None):
+            raise ValueError("give move() ms or dps (not both), got ms=%r dps=%r" % (ms, dps))
+        if ms is not None:
+            _ms("ms", ms)
+        else:
+            _dps(dps)
+        pose, clamped = self._targets(targets)
+        joints = self._joints
+        at = self._at
+        unknown = [i for i in pose if at[i] is None and (dps or joints[i].dps)]
+        if unknown:
+            self._read(unknown)  # a speed needs a distance: where are they?
+        took = ms or 0
+        if dps:
+            for i, position in pose.items():
+                took = max(took, _time(abs(position - at[i]) / joints[i].per_degree, dps))
+        slowed = 0
+        for i, position in pose.items():
+            if joints[i].dps:
+                need = _time(abs(position - at[i]) / joints[i].per_degree, joints[i].dps)
+                if need > took:
+                    took = need
+                    slowed = 1
+        if took > _MS_MAX:
+            raise ValueError(
+                "the move would take %d ms, more than %d: move in steps, or faster"
+                % (took, _MS_MAX)
+            )
+        self._stop_stream()
+        self.bus.move_many([(self._ids[i], p) for i, p in pose.items()], took)
+        for i, position in pose.items():
+            at[i] = position
+        self.clamped += clamped
+        self.slowed += slowed
+        return took
+
+    def where(self, names=None):
+        """{name: degrees} of these joints (all by default), read from the
+        controller now (a blocking query), to 0.1 degree."""
+        indices = list(range(len(self.names))) if names is None else [self._i(n) for n in names]
+        self._read(indices)
+        return {self.names[i]: round(self._joints[i].degrees(self._at[i]), 1) for i in indices}
+
+    def capture(self):
+        """The pose the robot is in now, {name: degrees} of every joint: for a
+        Sequence. Pose the robot by hand after limp(), then capture()."""
+        return self.where()
+
+    def limp(self, names=None):
+        """Let these joints (all by default) go limp, to be posed by hand; the
+        next move gives them their torque back. Ends the stream."""
+        indices = list(range(len(self.names))) if names is None else [self._i(n) for n in names]
+        self._stop_stream()
+        self.bus.unload([self._ids[i] for i in indices])
+        for i in indices:
+            self._at[i] = None  # they will be moved by hand
+
+    def home(self, pose=None, dps=30):
+        """A soft start: read where the joints are, then go to pose (default:
+        every joint at 0 degrees, within its limits) at dps. Return the ms."""
+        _dps(dps)
+        if pose is None:
+            pose = {name: min(max(0, j.lo), j.hi) for name, j in self.joints.items()}
+        self._targets(pose)  # check it before anything is sent
+        self._read(list(range(len(self.names))))
+        return self.move(pose, dps=dps)
+
+    def estop(self):
+        """Stop: the player and the stream end, the action group stops, and every
+        joint goes limp."""
+        if self.player:
+            self.player.stop()
+        self._stop_stream()
+        for i in range(len(self._at)):
+            self._at[i] = None
+        try:
+            self.bus.stop_group()
+        finally:
+            self.bus.unload(self._ids)
+
+    # The stream.
+
+    def stream(self, targets):
+        """Store targets {name: degrees} for step() to send: the latest win, and
+        nothing is sent here. Allocates nothing once each joint has been streamed
+        to. Returns how many targets were clamped to their limits."""
+        if _type(targets) is not dict:
+            raise TypeError("targets must be a dict {joint name: degrees}, got %r" % (targets,))
+        index = self._index
+        joints = self._joints
+        tmp = self._tmp
+        clamped = 0
+        for name in targets:  # check all first: a bad one stores nothing
+            i = index.get(name) if _type(name) is str else None
+            if i is None:
+                self._i(name)
+            degrees = targets[name]
+            t = _type(degrees)
+            if t is not _int and (t is not _float or not _NINF < degrees < _INF):
+                _number("targets[%r]" % name, degrees)
+            joint = joints[i]
+            if degrees < joint.lo or degrees > joint.hi:
+                clamped += 1
+            if joint._pps and self._at[i] is None:
+                raise ValueError(
+                    "joint %r has a dps limit and no known position: home() or where() first"
+                    % name
+                )
+            tmp[i] = joint.position(degrees)
+        for name in targets:
+            i = index[name]
+            self._goal[i] = tmp[i]
+            if not self._in[i]:
+                self._in[i] = 1
+                self._live.append(self._pairs[i])
+                self._live_i.append(i)
+        now = time.ticks_ms()
+        self._given_before = self._given
+        self._given = now
+        self._fresh = True
+        self.clamped += clamped
+        return clamped
+
+    def step(self):
+        """From the control loop: send the latest stream targets in one frame if
+        there are new ones and the wire is free, or will be before the next
+        step(). Never waits for the UART; allocates nothing. True if it sent."""
+        now = time.ticks_ms()
+        since = time.ticks_diff(now, self._stepped)  # the loop's period
+        self._stepped = now
+        if not self._fresh:
+            return False
+        live = self._live
+        frame = self.frame_ms or 3 * len(live) + 8  # ms: at 9600 baud, until measured
+        ahead = self.bus.wire_ms()
+        if ahead > (since + 1 if since < frame else frame):
+            return False
+        # Interpolate over the time to the next update: the pace of stream(),
+        # or the frame's wire time if that is longer.
+        ms = time.ticks_diff(self._given, self._given_before)
+        if ms < frame or ms > _GAP_MS:
+            ms = frame
+        at = self._at
+        goal = self._goal
+        joints = self._joints
+        fresh = False
+        for k in range(len(live)):
+            i = self._live_i[k]
+            position = goal[i]
+            pps = joints[i]._pps
+            if pps:  # no faster than the joint's dps: step towards the goal
+                most = pps * ms // 1000 or 1
+                if position > at[i] + most:
+                    position = at[i] + most
+                    fresh = True
+                elif position < at[i] - most:
+                    position = at[i] - most
+                    fresh = True
+            live[k][1] = position
+        self.bus.move_many(live, ms)
+        for k in range(len(live)):
+            at[self._live_i[k]] = live[k][1]
+        if fresh:
+            self.slowed += 1
+        self._fresh = fresh
+        self.updates += 1
+        # The frame's time on the wire, as wire_ms() grew (whole ms: the most seen).
+        sent = self.bus.wire_ms() - ahead
+        if len(live) != self._frame_n:
+            self._frame_n = len(live)
+            self.frame_ms = 0
+        if sent > self.frame_ms:
+            self.frame_ms = sent
+        return True
+
+    def _stop_stream(self):
+        # Forget the stream's targets: a later stream() starts afresh.
+        self._fresh = False
+        self._live.clear()
+        self._live_i.clear()
+        for i in range(len(self._in)):
+            self._in[i] = 0
+
+
+def _time(degrees, dps):
+    # ms to go degrees at dps, rounded up.
+    return math.ceil(degrees * 1000 / dps)
+
+
+class Sequence:
+    def __init__(self, steps=()):
+        """steps: (pose, ms) pairs: each pose {name: degrees}, and the ms to reach it."""
+        self.steps = []
+        for step in steps:
+            try:
+                pose, ms = step
+            except (TypeError, ValueError):
+                raise TypeError("steps must be (pose, ms) pairs, got %r" % (step,))
+            self.append(pose, ms)
+
+    def append(self, pose, ms):
+        """Add a pose {name: degrees}, reached ms after the one before."""
+        if _type(pose) is not dict or not pose:
+            raise TypeError("pose must be a dict {joint name: degrees}, got %r" % (pose,))
+        for name, degrees in pose.items():
+            if _type(name) is not str:
+                raise TypeError("pose's names must be str, got %r" % (name,))
+            _number("pose[%r]" % name, degrees)
+        self.steps.append((dict(pose), _ms("ms", ms)))
+
+    def __len__(self):
+        return len(self.steps)
+
+    def save(self, path):
+        """Write the sequence to path as JSON (Sequence.load() reads it)."""
+        with open(path, "w") as f:
+            json.dump({"steps": [{"ms": ms, "pose": pose} for pose, ms in self.steps]}, f)
+
+    @staticmethod
+    def load(path):
+        """The sequence that save() wrote to path."""
+        with open(path) as f:
+            steps = json.load(f)["steps"]
+        return Sequence((step["pose"], step["ms"]) for step in steps)
+
+    def play(self, robot, speed=1.0, loop=False):
+        """A Player of this sequence on robot: call its step() from a loop, or
+        await it. speed 2.0 plays twice as fast."""
+        return Player(robot, self, speed, loop)
+
+
+class Player:
+    def __init__(self, robot, sequence, speed=1.0, loop=False):
+        _number("speed", speed, 0)
+        if not speed:
+            raise ValueError("speed must be more than 0, got %r" % (speed,))
+        if not sequence.steps:
+            raise ValueError("the sequence has no poses")
+        self.robot = robot
+        self.loop = bool(loop)
+        self.speed = speed
+        self._poses = []
+        for pose, ms in sequence.steps:
+            robot._targets(pose)  # every name and number checked before anything moves
+            self._poses.append((pose, _ms("ms / speed", round(ms / speed))))
+        self.index = -1  # the pose last sent
+        self.loops = 0  # times the sequence has come round again
+        self.done = False
+        self._due = None  # ticks_ms when the pose last sent will have been reached
+        if robot.player:
+            robot.player.stop()
+        robot.player = self
+
+    def step(self):
+        """Send the next pose if its time has come; never waits. True if it sent."""
+        if self.done:
+            return False
+        now = time.ticks_ms()
+        due = self._due
+        if due is not None and time.ticks_diff(now, due) < 0:
+            return False
+        if self.index + 1 == len(self._poses):
+            if not self.loop:
+                self.stop()
+                return False
+            self.index = -1
+            self.loops += 1
+        self.index += 1
+        pose, ms = self._poses[self.index]
+        took = self.robot.move(pose, ms=ms)
+        # Time from when this pose was due, so that a late step() does not delay
+        # the ones after it; from now, if it came very late.
+        if due is None or time.ticks_diff(now, due) > _LATE_MS:
+            due = now
+        self._due = time.ticks_add(due, took)
+        return True
+
+    def stop(self):
+        """Stop playing; nothing is sent (the pose on its way is reached)."""
+        self.done = True
+        if self.robot.player is self:
+            self.robot.player = None
+
+    async def run(self, poll_ms=10):
+        """Play to the end (for ever with loop, until stop()), sleeping between poses."""
+        global _asyncio
+        if _asyncio is None:
+            import asyncio as _asyncio
+        while not self.done:
+            self.step()
+            if not self.done:
+                wait = poll_ms
+                if self._due is not None:
+                    wait = min(wait, max(0, time.ticks_diff(self._due, time.ticks_ms())))
+                await _asyncio.sleep_ms(wait)
+
+    def __await__(self):
+        return self.run()
+
+    __iter__ = __await__
