@@ -142,7 +142,7 @@ def measure(port, n, way, seconds=SECONDS):
     if backlog:
         w.run_ms(backlog // 1000 + 2)
     tol = 1 if way == "stream" else 0
-    poses = {}  # tick: [ids arrived, when the last was in]
+    poses = {}  # tick: [ids arrived, when the one that made them all was in]
     wrong = 0
     whole = 0  # frames of one servo (the naive way's) or of n servos
     cursor = 0
@@ -162,8 +162,9 @@ def measure(port, n, way, seconds=SECONDS):
         whole += len(pairs) in (1, n)
         cursor = k
         pose = poses.setdefault(k, [set(), 0])
-        pose[0].update(s for s, _ in pairs)
-        pose[1] = at
+        if len(pose[0]) < n:  # a pose reaches the controller once: a repeat is no update
+            pose[0].update(s for s, _ in pairs)
+            pose[1] = at
     ages = []
     for k, (got, at) in poses.items():
         if len(got) == n and at <= end:
