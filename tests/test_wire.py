@@ -494,6 +494,21 @@ class Observations(unittest.TestCase):
         self.assertEqual(wire.parse(STOP + b"\x55\x55\x05"), ([STOP], b"", b"\x55\x55\x05"))
         self.assertEqual(wire.parse(b"\x55\x55\x05\x07"), ([], b"\x55\x55\x05\x07", b""))
 
+    def test_arrivals_say_when_each_frames_last_byte_was_in(self):
+        for port in wire.PORTS:
+            w = world(port)
+            w.uart.write(b"\x00" + MOVE_1_TO_800 + STOP[:3])  # noise, a frame, a cut one
+            w.run_ms(40)
+            w.uart.write(STOP)  # at 40.010 ms (each write costs 5 us), on an idle line
+            w.run_ms(20)
+            # The noise byte first: the move's last byte is the 11th of the burst.
+            want = [(5 + wire_us(11), MOVE_1_TO_800), (40010 + wire_us(4), STOP)]
+            self.assertEqual(w.arrivals(), want, port)
+            self.assertEqual([f for _, f in w.arrivals()], w.frames(), port)
+        ends = []
+        self.assertEqual(wire.parse(b"\x00" + STOP + STOP, ends)[0], [STOP, STOP])
+        self.assertEqual(ends, [5, 9])
+
     def test_the_same_run_gives_the_same_bytes_at_the_same_times(self):
         def run(port):
             w = wire.World(port)  # ticks that wrap, calls that cost

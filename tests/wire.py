@@ -7,6 +7,7 @@
 #   bus = busservo.BusServo(w.uart)
 #   w.clock.advance_ms(20)           # time passes; the wire catches up when looked at
 #   w.frames(), w.garbled            # what the controller received
+#   w.arrivals()                     # (us, frame): when each frame was in
 #   w.noise(b"\x55\x55\x05")         # faults: noise, drop, cut_reply, late,
 #   w.uart.fail("readinto", OSError(5)), w.uart.during(...), w.uart.stall(True)
 #
@@ -263,10 +264,11 @@ def _split(data):
     return out
 
 
-def parse(data):
+def parse(data, ends=None):
     """(frames, garbage, rest) of bytes a controller received, strictly by the
     protocol's lengths of the commands it takes; rest: the start of a frame
-    that may still be arriving."""
+    that may still be arriving. Given a list as ends, it gets each frame's end:
+    the index in data just past its last byte."""
     frames = []
     garbage = bytearray()
     i = 0
@@ -293,6 +295,8 @@ def parse(data):
             break
         frames.append(bytes(data[i : i + length + 2]))
         i += length + 2
+        if ends is not None:
+            ends.append(i)
     return frames, bytes(garbage), bytes(data[i:])
 
 
@@ -831,6 +835,14 @@ class World:
         """The whole frames the controller received, by the protocol's lengths."""
         self.sync()
         return parse(self._received)[0]
+
+    def arrivals(self):
+        """(us, frame) of each whole frame the controller received, in order:
+        us is when its last byte had arrived, so when the controller had it."""
+        self.sync()
+        ends = []
+        frames = parse(self._received, ends)[0]
+        return [(self.sent_at[end - 1], frame) for end, frame in zip(ends, frames)]
 
     @property
     def garbled(self):
