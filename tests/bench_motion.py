@@ -35,14 +35,7 @@
 import busservo
 import wire
 
-try:
-    import busservo_motion as bm
-
-    MOTION = "lib/busservo_motion.py"
-except ImportError:
-    import _motion_standin as bm
-
-    MOTION = None  # tests/_motion_standin.py: say so, loudly
+import busservo_motion as bm
 
 TICK_US = 10000  # 100 Hz
 TIME_MS = 20  # the moves' time, ways 1 and 2
@@ -226,14 +219,6 @@ def ms(x):
 
 def main(seconds=SECONDS, ports=wire.PORTS, servos=SERVOS, out=print):
     """Measure every case, print the tables with out(), return the cases' figures."""
-    if MOTION:
-        out("way 3 (stream) measured with: %s" % MOTION)
-    else:
-        out("!" * 78)
-        out("!!! way 3 (stream) measured with the STAND-IN tests/_motion_standin.py,")
-        out("!!! NOT with lib/busservo_motion.py (not found): its figures are not the module's")
-        out("!" * 78)
-    out("")
     out(
         "A 100 Hz loop, new targets for every servo every tick, %d s of simulated time a case."
         % seconds
