@@ -391,7 +391,7 @@ class Robot:
         live = self._live
         frame = self.frame_ms or 3 * len(live) + 8  # ms: at 9600 baud, until measured
         ahead = self.bus.wire_ms()
-        if ahead > (since + 1 if since < frame else frame):
+        if ahead > (since if since < frame else frame):
             return False
         # Interpolate over the time to the next update: the pace of stream(),
         # or the frame's wire time if that is longer.

@@ -259,7 +259,7 @@ def main(seconds=SECONDS, ports=wire.PORTS, servos=SERVOS, out=print):
         + "."
     )
     out("")
-    out("stream()'s goals%s:" % ("" if MOTION else " (THE STAND-IN's figures)"))
+    out("stream()'s goals:")
     out("")
     for r in results:
         if r["way"] == "stream":
