@@ -33,9 +33,8 @@
 #   bytes still not sent. Also counted, and shown beside them if any: the controller's beeps,
 #   OSErrors the driver raised, received bytes the UART lost, frames of no tick's targets.
 import busservo
-import wire
-
 import busservo_motion as bm
+import wire
 
 TICK_US = 10000  # 100 Hz
 TIME_MS = 20  # the moves' time, ways 1 and 2
