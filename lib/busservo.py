@@ -35,7 +35,7 @@ _TIMEOUT_MAX_MS = const(60000)
 _LATE_MS = const(100)  # how long after its query gave up a reply may still come
 _GAP_MS = const(20)  # a frame's bytes come closer together than this, FIFOs and all
 _TICKS = const(0x3FFFFFFF)  # ticks modulo 2**30, as a 32-bit port's wrap
-_AHEAD_MS = const(30000)  # more ahead than this (28 KB at 9600 baud): ticks came round
+_AHEAD_MS = const(10000)  # more ahead than this (9.6 KB at 9600 baud): ticks came round
 _SLACK_MS = const(50)  # for a UART's transmit buffer to make room, beyond the wire time
 
 # The Length of each frame the controller sends, by its command (0: it sends
@@ -73,7 +73,7 @@ class BusServo:
     def __init__(self, uart, baudrate=9600):
         _check("baudrate", baudrate, 1200, 1000000)
         if not hasattr(uart, "readinto"):  # a path, say: boards/unix.py opens one
-            raise TypeError("uart needs any/readinto/write, got %r (see boards/unix.py)" % (uart,))
+            raise TypeError("uart needs any/readinto/write, got %r" % (uart,))
         self._uart = uart
         self._write = uart.write  # one lookup, not two, per command
         self._any = uart.any
@@ -339,7 +339,7 @@ class BusServo:
         _check("timeout_ms", timeout_ms, 0, _TIMEOUT_MAX_MS)
         if self._cut_at:
             self._finish()  # a request cut short goes first: its reply is waited out
-        start = time.ticks_ms()
+        start = time.ticks_add(time.ticks_ms(), self.wire_ms())  # when the wire is free
         while True:  # decode what has come first: none of it answers this query
             got = self._next_frame()
             if got is None:
@@ -495,5 +495,5 @@ class BusServo:
                 self.positions[rx[i]] = position
                 answers = answers and asked[k] == rx[i]
                 k += 1
-            if answers:
+            if answers or self._waiting[1] > 1:  # in order: an older request's, if not ours
                 self._waiting[1] -= 1

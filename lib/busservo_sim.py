@@ -9,7 +9,8 @@
 # - servos move linearly from where they are to their target over time_ms, so a
 #   position read mid-move gives the value in between (servos start at 500);
 # - a servo turns 0..1000 only: a target beyond 1000 stops at 1000, as a real
-#   servo stops at its limit, and counts one `clamped`;
+#   servo stops at its limit, and counts one `clamped` (`pwm`, a set of ids,
+#   makes those PWM servos of an LSC board instead: 0..2500 us);
 # - action groups (`groups`, {group: ms per run}) run `times` times or forever,
 #   sending RUN as they start, COMPLETE as they end, STOP when stopped (by a STOP
 #   command, or by a RUN of another group); a run longer than the ticks can span
@@ -42,6 +43,7 @@ SIM_SILENT = 0xF0  # the simulator's own command: Prm 1 = 1 silent, 0 talking
 GROUPS = {0: 1000, 1: 500, 2: 2000, 8: 1500}  # default action groups, ms per run
 CENTER = 500  # where a servo starts
 LIMIT = 1000  # the far end of a servo's range, 0..1000
+PWM_LIMIT = 2500  # a PWM servo's, in us
 # ms a run's end moves at a time: ticks_add() refuses half the ticks' period
 # (2**29 ms on most boards, 2**28 where small ints have 30 bits).
 _SPAN = 1 << 27
@@ -54,6 +56,7 @@ class SimController:
         self.silent = False
         self.beeps = 0
         self.clamped = 0
+        self.pwm = set()
         self.limp = set()
         self._ticks_ms = ticks_ms
         self._servos = {}  # id: (from, to, start ticks, time_ms)
@@ -171,8 +174,9 @@ class SimController:
             time_ms = p[1] | p[2] << 8
             for k in range(3, 3 * p[0] + 3, 3):
                 servo_id, target = p[k], p[k + 1] | p[k + 2] << 8
-                if target > LIMIT:  # the wire carries up to 65535; the servo stops at its end
-                    target = LIMIT
+                end = PWM_LIMIT if servo_id in self.pwm else LIMIT
+                if target > end:  # the wire carries up to 65535; the servo stops at its end
+                    target = end
                     self.clamped += 1
                 self._servos[servo_id] = (self.position(servo_id), target, now, time_ms)
                 self.limp.discard(servo_id)

@@ -9,7 +9,8 @@ It decodes what the driver writes and answers as the protocol says:
 - servos move linearly from where they are to their target over time_ms, so a position read
   mid-move gives the value in between (servos start at CENTER, 500);
 - a servo turns 0..LIMIT (1000) only: a target beyond it stops at LIMIT, as a real servo
-  stops at its limit, and counts one `clamped`;
+  stops at its limit, and counts one `clamped` (the ids in `pwm` are PWM servos of an LSC
+  board instead, up to PWM_LIMIT, 2500 us);
 - action groups (`groups`, {group: ms per run}) run `times` times or forever, sending RUN as
   they start, COMPLETE as they end, STOP when stopped (by a STOP command, or by a RUN of
   another group);
@@ -31,6 +32,7 @@ GROUPS: dict[int, int]
 CENTER: Final = 500
 """Where a servo starts."""
 LIMIT: Final = 1000
+PWM_LIMIT: Final = 2500
 """The far end of a servo's range, 0..1000: a move beyond it stops there."""
 
 class SimController:
@@ -45,7 +47,10 @@ class SimController:
     beeps: int
     """Malformed frames seen (the controller's "beep beep")."""
     clamped: int
-    """Move targets beyond LIMIT, each stopped at LIMIT (a servo turns 0..1000 only)."""
+    """Move targets beyond LIMIT, each stopped at LIMIT (a servo turns 0..1000 only), or for
+    a PWM servo beyond PWM_LIMIT."""
+    pwm: set[int]
+    """The ids of PWM servos (an LSC board's, 500..2500 us): they turn up to PWM_LIMIT."""
     limp: set[int]
     """The servos unloaded (limp) since they last moved."""
 

@@ -209,7 +209,7 @@ class BadInput(unittest.TestCase):
         try:
             busservo.BusServo("/dev/ttyUSB0")
         except TypeError as e:
-            for word in ("uart", "any", "readinto", "write", "/dev/ttyUSB0", "boards/unix.py"):
+            for word in ("uart", "any", "readinto", "write", "/dev/ttyUSB0"):
                 self.assertIn(word, str(e))
         else:
             self.fail("BusServo('/dev/ttyUSB0') did not raise TypeError")

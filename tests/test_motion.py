@@ -21,6 +21,7 @@ from test_alloc import heap_per_call
 def world(port="rp2"):
     """(world, bus), the driver and the motion layer on the world's clock."""
     w = wire.World(port)
+    w.sim.pwm.add(6)  # the claw: a PWM servo, 500..2500 us
     busservo.time = bm.time = w.clock
     return w, busservo.BusServo(w.uart)
 

@@ -147,6 +147,23 @@ class Wire(unittest.TestCase):
             w.sim.write(b"\x55\x55\x08\x03\x01\x00\x00\x01\x20\x03")  # servo 1 to 800
             self.assertEqual(bus.read_positions([1]), {1: 800}, port)
 
+    def test_a_request_behind_a_long_move_is_waited_for_until_it_is_answered(self):
+        for port, _, bus in ports():
+            bus.move_many([(s, 500) for s in range(1, 84)], 0)  # 254 bytes: 265 ms of wire
+            bus.request_positions([1])  # behind it: answered in about 280 ms
+            self.assertEqual(bus.read_positions([1]), {1: 500}, port)
+            bus.move(1, 900, 0)
+            self.assertEqual(bus.read_positions([1]), {1: 900}, port)  # not the one before
+
+    def test_requests_for_other_ids_answered_in_turn_leave_nothing_to_wait_for(self):
+        for port, w, bus in ports():
+            bus.request_positions([1, 2, 3])
+            bus.request_positions([4, 5, 6])
+            self.assertEqual(len(settle(w, bus, 100)), 2, port)  # both replies, as events
+            start = w.clock.now_us
+            self.assertEqual(bus.read_positions([1]), {1: 500}, port)
+            self.assertTrue(w.clock.now_us - start < 30000, port)  # asked at once
+
     def test_a_cut_request_finished_by_the_next_query_is_answered_once(self):
         w = wire.World("rp2")  # esp32's write() takes a 6-byte frame whole, or waits
         busservo.time = w.clock
@@ -414,6 +431,20 @@ class Async(unittest.TestCase):
 
         for port, w, bus in async_ports():
             self.assertEqual(asyncio.run(main(w, bus)), (7500, []), port)
+
+    def test_another_tasks_request_for_other_ids_does_not_hide_a_querys_reply(self):
+        async def main(w, bus):
+            async def other():
+                await busservo_async.asyncio.sleep_ms(3)
+                bus.request_positions([2])  # while the query below waits for [1]
+
+            task = asyncio.create_task(other())
+            got = await bus.read_positions([1])
+            await task
+            return got
+
+        for port, w, bus in async_ports():
+            self.assertEqual(asyncio.run(main(w, bus)), {1: 500}, port)
 
     def test_wait_group_done_when_its_run_echo_is_lost(self):
         # A byte of the RUN that comes back is lost on the line: the COMPLETE,

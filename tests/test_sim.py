@@ -90,6 +90,13 @@ class Simulator(unittest.TestCase):
         self.bus.move(1, 0, 0)
         self.assertEqual((self.sim.position(1), self.sim.clamped), (0, 2))
 
+    def test_a_pwm_servo_turns_to_2500_and_stops_there(self):
+        self.sim.pwm.add(6)  # a PWM servo on an LSC board: 500..2500 us
+        self.bus.move_many([(6, 2400), (1, 2400)], 0)
+        self.assertEqual(self.bus.read_positions([6, 1]), {6: 2400, 1: 1000})
+        self.bus.move(6, 3000, 0)
+        self.assertEqual((self.sim.position(6), self.sim.clamped), (2500, 2))
+
     def test_a_group_runs_then_completes(self):
         self.bus.run_group(8, 2)
         self.assertEqual(events(self.bus), [CMD_ACTION_GROUP_RUN])
