@@ -18,7 +18,9 @@ from shell import MICROPYTHON, scratch, sh
 from test_alloc import CALLS, heap_per_call
 from test_frames import BATTERY_7500, COMPLETE_8_ONCE, POSITIONS_ALL_500, RUN_8_ONCE, STOP
 
-N = 30000  # calls timed per figure
+N = 30000  # calls timed per figure; `bench.py quick` times 300, to check that it runs
+if sys.argv[-1] == "quick":
+    N = 300
 
 
 class ReplayUART:

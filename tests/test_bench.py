@@ -1,0 +1,21 @@
+# The README's benchmark command runs to its end: tests/bench.py, in short (300 calls a
+# figure), so that it cannot rot between the runs that give the README its figures.
+import unittest
+
+from shell import sh
+
+
+class Bench(unittest.TestCase):
+    def test_the_benchmark_runs_and_prints_its_tables(self):
+        ok, out = sh("sh boards/unix.sh tests/bench.py quick")
+        self.assertTrue(ok, out)
+        for line in (
+            "| move | ",
+            "| poll(), idle | ",
+            "| busservo.mpy (mpy-cross -O3, as built) | ",
+        ):
+            self.assertIn(line, out)
+
+
+if __name__ == "__main__":
+    unittest.main()
