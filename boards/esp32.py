@@ -6,8 +6,14 @@
 # GPIO16 is 3.3 V and not 5 V tolerant: if the controller's TX measures about 5 V,
 # put a divider (1k in series, 2k to GND) on it. boards/README.md, wiring-esp32.svg.
 # (UART0 is the REPL's; UART1's default pins are the flash's on most modules.)
-from machine import UART
+from machine import UART, Pin
 
 
 def uart():
     return UART(2, baudrate=9600, tx=17, rx=16)
+
+
+def button():
+    # The BOOT button of most ESP32 boards (GPIO0): 0 while pressed. examples/teach.py
+    # captures a pose at each press.
+    return Pin(0, Pin.IN, Pin.PULL_UP)

@@ -1,3 +1,4 @@
+# Plays a sequence on servos 1..4; real servos only once I_HAVE_CHECKED_MY_ROBOT = True.
 # Play a sequence back: from teach.json (written by examples/teach.py) if there is one, else
 # a wave made here. Once with player.step() from a loop, then looping at twice the speed until
 # stopped, then with asyncio (await player). estop() stops everything and lets the joints go.
@@ -8,19 +9,36 @@ import time
 import busservo
 import busservo_motion as bm
 
+# Set True once you have checked that servos 1..4 can turn freely, with nothing in their way.
+I_HAVE_CHECKED_MY_ROBOT = False
+DPS: int | None = 30  # on a real robot no joint turns faster (degrees a second)
+
 try:
     from board import uart  # your board file: boards/<port>.py, copied as board.py
-except ImportError:
-    from busservo_sim import uart  # no board file: the simulated controller
+except ImportError as e:
+    if "'board'" not in str(e):
+        raise  # board.py is there but fails to import: its error, not the simulator
+    from busservo_sim import uart
 
-bus = busservo.BusServo(uart())
+    print("no board.py found: using the simulated controller, nothing real moves")
+    I_HAVE_CHECKED_MY_ROBOT = True  # nothing real to check
+    DPS = None  # nor to hurt: full speed
+
+port = uart()
+print("talking to", port)
+bus = busservo.BusServo(port)
+print("the servos are at", bus.read_positions([1, 2, 3, 4]))
+print("this plays teach.json (or a wave) on them, at most 30 degrees/s on a real robot")
+if not I_HAVE_CHECKED_MY_ROBOT:
+    print("nothing moved: check, then set I_HAVE_CHECKED_MY_ROBOT = True (top of this file)")
+    raise SystemExit
 arm = bm.Robot(
     bus,
     {
-        "base": bm.Joint(1),
-        "shoulder": bm.Joint(2, limits=(-90, 90)),
-        "elbow": bm.Joint(3, limits=(-90, 90)),
-        "claw": bm.Joint(4, limits=(0, 60)),
+        "base": bm.Joint(1, dps=DPS),
+        "shoulder": bm.Joint(2, limits=(-90, 90), dps=DPS),
+        "elbow": bm.Joint(3, limits=(-90, 90), dps=DPS),
+        "claw": bm.Joint(4, limits=(0, 60), dps=DPS),
     },
 )
 try:

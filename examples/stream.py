@@ -1,4 +1,5 @@
-# Stream a sine wave to six joints at the wire's pace: the loop sets new targets every 10 ms
+# Streams a sine wave to servos 1..6; real servos only once I_HAVE_CHECKED_MY_ROBOT = True.
+# A sine wave to six joints at the wire's pace: the loop sets new targets every 10 ms
 # with stream(), which only stores them; step() sends the latest in one frame whenever the wire
 # is free, so the loop never waits and no stale target is queued. Prints the updates a second.
 #   mpremote run examples/stream.py
@@ -8,14 +9,31 @@ import time
 import busservo
 import busservo_motion as bm
 
+# Set True once you have checked that servos 1..6 can turn 60 degrees each way, freely.
+I_HAVE_CHECKED_MY_ROBOT = False
+DPS: int | None = 30  # on a real robot no joint turns faster (degrees a second)
+
 try:
     from board import uart  # your board file: boards/<port>.py, copied as board.py
-except ImportError:
-    from busservo_sim import uart  # no board file: the simulated controller
+except ImportError as e:
+    if "'board'" not in str(e):
+        raise  # board.py is there but fails to import: its error, not the simulator
+    from busservo_sim import uart
+
+    print("no board.py found: using the simulated controller, nothing real moves")
+    I_HAVE_CHECKED_MY_ROBOT = True  # nothing real to check
+    DPS = None  # nor to hurt: full speed
 
 SECONDS = 3
-bus = busservo.BusServo(uart())
-arm = bm.Robot(bus, {"j%d" % i: bm.Joint(i, limits=(-60, 60)) for i in range(1, 7)})
+port = uart()
+bus = busservo.BusServo(port)
+print("talking to", port)
+print("the servos are at", bus.read_positions([1, 2, 3, 4, 5, 6]))
+print("this homes them to 0 degrees at 30 degrees/s, then streams a sine wave for 3 s")
+if not I_HAVE_CHECKED_MY_ROBOT:
+    print("nothing moved: check, then set I_HAVE_CHECKED_MY_ROBOT = True (top of this file)")
+    raise SystemExit
+arm = bm.Robot(bus, {"j%d" % i: bm.Joint(i, limits=(-60, 60), dps=DPS) for i in range(1, 7)})
 print("homing: to 0 degrees at 30 degrees/s")
 time.sleep_ms(arm.home(dps=30))
 

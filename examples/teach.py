@@ -1,31 +1,48 @@
+# Servos 1..4 go limp, then replay poses; real servos only once I_HAVE_CHECKED_MY_ROBOT = True.
 # Teach by hand, then play back: the joints go limp, you pose the robot by hand and press
-# Enter to capture each pose (q and Enter to end), the poses are saved to teach.json, and
-# the robot plays them back. On the simulator no one can pose it, so the example poses it.
+# Enter (or board.py's button, if it has one) to capture each pose (q and Enter to end), the
+# poses are saved to teach.json, and the robot plays them back. On the simulator no one can
+# pose it, so the example poses it.
 #   mpremote run examples/teach.py          (at the board's REPL: input() needs a console)
 import time
 
 import busservo
 import busservo_motion as bm
 
+# Set True once you hold the arm (limp, it falls) and servos 1..4 can turn freely.
+I_HAVE_CHECKED_MY_ROBOT = False
+DPS: int | None = 30  # on a real robot no joint turns faster (degrees a second)
+
 try:
     from board import uart  # your board file: boards/<port>.py, copied as board.py
 
     SIMULATED = False
-except ImportError:
-    from busservo_sim import uart  # no board file: the simulated controller
+except ImportError as e:
+    if "'board'" not in str(e):
+        raise  # board.py is there but fails to import: its error, not the simulator
+    from busservo_sim import uart
 
-    SIMULATED = True
+    print("no board.py found: using the simulated controller, nothing real moves")
+    SIMULATED = I_HAVE_CHECKED_MY_ROBOT = True  # nothing real to check
+    DPS = None  # nor to hurt: full speed
 
 PATH = "teach.json"
 MS = 1000  # to go from one pose to the next, in playback
-bus = busservo.BusServo(uart())
+port = uart()
+print("talking to", port)
+bus = busservo.BusServo(port)
+print("the servos are at", bus.read_positions([1, 2, 3, 4]))
+print("this lets them go limp, captures the poses you make by hand, then plays them back")
+if not I_HAVE_CHECKED_MY_ROBOT:
+    print("nothing moved: check, then set I_HAVE_CHECKED_MY_ROBOT = True (top of this file)")
+    raise SystemExit
 arm = bm.Robot(
     bus,
     {
-        "base": bm.Joint(1),
-        "shoulder": bm.Joint(2, limits=(-90, 90)),
-        "elbow": bm.Joint(3, limits=(-90, 90)),
-        "claw": bm.Joint(4, limits=(0, 60)),
+        "base": bm.Joint(1, dps=DPS),
+        "shoulder": bm.Joint(2, limits=(-90, 90), dps=DPS),
+        "elbow": bm.Joint(3, limits=(-90, 90), dps=DPS),
+        "claw": bm.Joint(4, limits=(0, 60), dps=DPS),
     },
 )
 # On the simulator, these stand for the hands that pose the robot.
@@ -36,13 +53,31 @@ HANDS = [
 ]
 
 
+try:  # a board.py may offer a button(): a machine.Pin that reads 0 while pressed
+    import board
+
+    button = getattr(board, "button", None)
+except ImportError:
+    button = None
+
+
 def ask(n):
-    """The line typed for pose n, or None to end (q, or no console)."""
+    """True once pose n is made: Enter at the console (q, Enter: done), or a press of
+    board.py's button (a long press, 1 s: done). False to end (or with no console)."""
+    if button:
+        pin = button()
+        print("pose %d: move the robot, then press the button (hold it 1 s: done)" % n)
+        while pin.value():
+            time.sleep_ms(10)
+        pressed = time.ticks_ms()
+        while not pin.value():
+            time.sleep_ms(10)
+        return time.ticks_diff(time.ticks_ms(), pressed) < 1000
     try:
         line = input("pose %d: move the robot, then Enter (q, Enter: done) " % n)
     except EOFError:  # no console: nothing more to capture
-        return None
-    return None if line.strip().lower() == "q" else line
+        return False
+    return line.strip().lower() != "q"
 
 
 sequence = bm.Sequence()
@@ -54,7 +89,7 @@ for n in range(1, 21):
             break
         arm.move(HANDS[n - 1], ms=0)  # the simulator's "hands"
         arm.limp()
-    elif ask(n) is None:
+    elif not ask(n):
         break
     pose = arm.capture()
     sequence.append(pose, MS)

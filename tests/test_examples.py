@@ -23,12 +23,16 @@ EXPECT = {
     "positions.py": "servo 6 at 500",
     "speed.py": "action group 1 at 50 %, the others at 100 %",
     "stream.py": "updates/s (the wire's limit for 6 servos: 38.4)",
-    "teach.py": "played back 3 poses",
+    "teach.py": "the joints are limp: pose the robot by hand",
     "unload.py": "posed at",
 }
 
 # The examples that move servos (or let them go limp); the others move nothing.
 MOVING = ("async_demo.py", "demo.py", "group.py", "move.py", "move_many.py", "unload.py")
+# The motion layer's: on a board their joints turn at most 30 degrees a second (DPS), which
+# their moves' times show, rather than 2 s a move (a stream's frames take ~26 ms each).
+MOTION = ("playback.py", "stream.py", "teach.py")
+MOVING += MOTION
 
 # The controller's commands that make servos move (or go limp).
 CMD_SERVO_MOVE = 3
@@ -181,9 +185,19 @@ class Examples(unittest.TestCase):
                 self.assertFalse("nothing moved" in out, name)
                 commands = board.commands()
                 self.assertTrue([cmd for cmd, _ in commands if cmd in MOVES], name)
+                at = {}  # each servo's position as last commanded (they start at 500)
                 for cmd, params in commands:
-                    if cmd == CMD_SERVO_MOVE:
-                        self.assertTrue(params[1] | params[2] << 8 >= 2000, (name, params))
+                    if cmd != CMD_SERVO_MOVE:
+                        continue
+                    ms = params[1] | params[2] << 8
+                    if name not in MOTION:
+                        self.assertTrue(ms >= 2000, (name, params))
+                    for k in range(3, len(params), 3):
+                        servo, position = params[k], params[k + 1] | params[k + 2] << 8
+                        # 30 degrees/s of a bus servo: 125 positions/s (and one for rounding)
+                        far = abs(position - at.get(servo, 500))
+                        self.assertTrue(name not in MOTION or far <= ms * 125 // 1000 + 1, params)
+                        at[servo] = position
             finally:
                 board.remove()
 

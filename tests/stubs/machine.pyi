@@ -4,6 +4,7 @@ from typing import Any
 class Pin:
     IN: int
     OUT: int
+    PULL_UP: int
     def __init__(
         self, id: int | str, mode: int = ..., pull: int | None = ..., **kwargs: Any
     ) -> None: ...
