@@ -120,15 +120,20 @@ fi
 
 # A script runs inside this, so that Ctrl-C ends it as a shell expects: no traceback, exit
 # status 130. The script gets its KeyboardInterrupt first; any other error is printed as
-# micropython prints it, without this code's own line. sys.argv, sys.path[0], __name__ and
-# __file__ are what micropython gives a script; the script's globals are its own.
+# micropython prints it, without this code's own line. sys.argv, __name__ and __file__ are
+# what micropython gives a script; the script's globals are its own. Its folder, and then the
+# folder it was run from (for a board.py there), come after the repository's modules: a folder
+# named busservo beside the script (this repository's clone) would hide them.
 RUN='import os, sys
 sys.argv.pop(0)
 __file__ = sys.argv[0]
 d = __file__.rpartition("/")[0]
 if __file__[0] != "/":
     d = os.getcwd() + ("/" + d if d else "")
-sys.path[0] = d or "/"
+sys.path.pop(0)
+sys.path.append(d or "/")
+if os.getcwd() != d:
+    sys.path.append(os.getcwd())
 del os, sys, d
 try:
     execfile(__file__)
@@ -168,4 +173,6 @@ for a in "$@"; do
     esac
     set -- "$@" "$a"
 done
+# The REPL alone: the folder it was opened in comes last on its path, as a script's does.
+[ $# = 0 ] && set -- -i -c "import sys;sys.path.append(sys.path.pop(0));del sys"
 exec "$VENV/bin/micropython" "$@"

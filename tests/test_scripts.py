@@ -116,6 +116,29 @@ class FromAnyFolder(unittest.TestCase):
         self.assertTrue(lines[0].startswith(REPO + "/"), out)  # the checkout's driver
         self.assertEqual(lines[1:4], ["42 ['a', 'b']", "from the caller's folder", ""], out)
 
+    def test_a_clone_folder_beside_the_script_does_not_hide_the_driver(self):
+        # As `git clone .../busservo` then a robot.py of one's own beside the clone.
+        d = self.dir
+        os.mkdir(d + "/busservo")  # the clone: to MicroPython, a namespace package
+        write(d + "/robot.py", "import busservo\nprint(busservo.BusServo.__name__)\n")
+        write(d + "/neighbour.py", "X = 'beside it'\n")
+        write(d + "/uses.py", "import neighbour\nprint(neighbour.X)\n")
+        for script, said in (("robot.py", "BusServo"), ("uses.py", "beside it")):
+            ok, out = sh("cd %s && sh %s %s" % (d, UNIX_SH, script))
+            self.assertEqual((ok, out), (True, said + "\n"), script)
+        ok, out = sh("cd %s && echo 'import busservo; busservo.BusServo' | sh %s" % (d, UNIX_SH))
+        self.assertTrue(ok, out)
+        self.assertIn("<class 'BusServo'>", out)  # the REPL too
+
+    def test_a_board_py_in_the_folder_run_from_is_found(self):
+        d = self.dir
+        # As `sh boards/unix.sh examples/check_wiring.py` with a board.py where one stands.
+        write(d + "/board.py", "def uart():\n    return 'the one here'\n")
+        os.mkdir(d + "/sub")
+        write(d + "/sub/which.py", "from board import uart\nprint(uart())\n")
+        ok, out = sh("cd %s && sh %s sub/which.py" % (d, UNIX_SH))
+        self.assertEqual((ok, out), (True, "the one here\n"))
+
     def test_with_no_micropypath_micropythons_default_path_still_counts(self):
         # ~/.micropython/lib is where `micropython -m mip install` puts packages.
         d = self.dir
