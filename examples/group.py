@@ -49,10 +49,12 @@ def wait_for(want, timeout_ms=10000):
     print("gave up waiting")
 
 
-bus.run_group(1)
-wait_for(busservo.CMD_ACTION_GROUP_COMPLETE)
-bus.run_group(2, 0)  # 0: forever
-wait_for(busservo.CMD_ACTION_GROUP_RUN)
-time.sleep_ms(500)
-bus.stop_group()
+try:
+    bus.run_group(1)
+    wait_for(busservo.CMD_ACTION_GROUP_COMPLETE)
+    bus.run_group(2, 0)  # 0: forever
+    wait_for(busservo.CMD_ACTION_GROUP_RUN)
+    time.sleep_ms(500)
+finally:  # also on Ctrl-C: a group that runs for ever must not outlive the example
+    bus.stop_group()
 wait_for(busservo.CMD_ACTION_GROUP_STOP)

@@ -201,6 +201,17 @@ class Examples(unittest.TestCase):
             finally:
                 board.remove()
 
+    def test_ctrl_c_stops_the_group_that_runs_for_ever(self):
+        board = Board()
+        try:
+            # Ctrl-C 0.8 s in: group 1 (0.5 s) is done, group 2 runs for ever.
+            ok, out = sh("timeout -s INT 0.8 sh boards/unix.sh " + board.opted_in("group.py"))
+            self.assertFalse(ok, out)
+            taken = [(cmd, params[:1]) for cmd, params in board.commands() if cmd in (6, 7)]
+            self.assertEqual(taken, [(6, [1]), (6, [2]), (7, [])], out)  # RUN 1, RUN 2, STOP
+        finally:
+            board.remove()
+
     def test_check_wiring_times_the_battery_round_trip(self):
         ok, out = sh("sh boards/unix.sh examples/check_wiring.py")
         self.assertTrue(ok, out)
