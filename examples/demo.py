@@ -9,7 +9,8 @@ import time
 import busservo
 
 # Set True once you have checked that servos 1..6 can each turn a little (100 of their 1000)
-# toward the middle of their range, and that your robot has room for action group 1.
+# toward the middle of their range (down, from the middle), and that your robot has room for
+# action group 1.
 I_HAVE_CHECKED_MY_ROBOT = False
 
 try:
@@ -71,11 +72,12 @@ def main():
     here = bus.read_positions(SERVOS)
     say("the servos are at:")
     show(here)
-    # 100 toward the middle: well away from the ends of a servo's range (0..1000).
+    # 100 toward the middle (down, from 500 on): never toward an end of the range (0..1000).
     nudged = {i: here[i] + 100 if here[i] < 500 else here[i] - 100 for i in SERVOS}
     back = {i: max(here[i], 0) for i in SERVOS}  # a servo at 0 may read -3
     say(
-        "this moves each 100 toward the middle over 2 s, back over 2 s, then runs group %d" % GROUP
+        "this moves each by 100, toward 500 (down from 500 on), over 2 s, back over 2 s, "
+        "then runs group %d" % GROUP
     )
     if not I_HAVE_CHECKED_MY_ROBOT:
         say("nothing moved: check, then set I_HAVE_CHECKED_MY_ROBOT = True (top of this file)")

@@ -30,3 +30,5 @@ bus.move(1, 800, 2000)  # a first move of 2 s gives you time to see it coming
 time.sleep_ms(2000)
 print("servo 1 is at", bus.read_positions([1])[1])
 bus.move(1, 500, 2000)
+time.sleep_ms(2000)
+print("and back at", bus.read_positions([1])[1])

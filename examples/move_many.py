@@ -34,3 +34,6 @@ time.sleep_ms(2000)
 here = bus.read_positions(SERVOS)
 print("now at", [here[i] for i in SERVOS])
 bus.move_many({1: 500, 2: 500, 3: 500, 4: 500, 5: 500, 6: 500}, 2000)  # a dict works too
+time.sleep_ms(2000)
+here = bus.read_positions(SERVOS)
+print("back at", [here[i] for i in SERVOS])
