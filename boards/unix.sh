@@ -14,6 +14,9 @@
 # .venv/micropython/, then the caller's MICROPYPATH (micropython's default, which has
 # ~/.micropython/lib, if none is set): the checkout's own modules come first, so that a copy
 # installed elsewhere never stands in for the code under test; the caller's add what is missing.
+# Last come a script's own folder and the folder it is run from (the REPL's too): its
+# neighbours and a board.py there are found, but a folder named busservo (this repository's
+# clone, beside a script) cannot hide the driver.
 # BUSSERVO_LIB=dir runs with dir in place of lib/ (the tests use it to run against the
 # compiled busservo.mpy).
 #
