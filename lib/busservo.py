@@ -306,8 +306,9 @@ class BusServo:
         self._went(buf[3])
 
     # Queries. The protocol numbers no requests, so a reply is known to answer
-    # ours only if nothing else of its kind can be on its way: a query first
-    # lets an earlier request's reply come (poll() gets it) or its time run out.
+    # ours only if nothing else of its kind can be on its way: the requests that
+    # went are counted (_went), and a query first lets their replies come
+    # (poll() gets them), or its time for them run out.
 
     def read_battery(self, timeout_ms=_TIMEOUT_MS):
         """Battery voltage in mV. Raises OSError(ETIMEDOUT) if no reply comes
