@@ -431,6 +431,11 @@ class Robot:
             self.frame_ms = sent
         return True
 
+    def hold(self):
+        """End the stream: targets not yet sent are dropped, and each joint stops
+        at the last target sent. Nothing is sent. A later stream() starts afresh."""
+        self._stop_stream()
+
     def _stop_stream(self):
         # Forget the stream's targets: a later stream() starts afresh.
         self._fresh = False

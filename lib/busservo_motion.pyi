@@ -140,6 +140,11 @@ class Robot:
         be before the next step()), send them in one move_many(), timed to glide until the
         next update (the frame's wire time, or the pace of stream() if slower). Never waits
         for the UART; allocates nothing. True if it sent a frame."""
+    def hold(self) -> None:
+        """End the stream: targets stream() gave that step() has not sent are dropped, and
+        each joint stops at the last target sent (reached within that frame's time).
+        Nothing is sent; a later stream() starts afresh. For a dead-man: a control loop
+        whose source of targets has gone quiet calls hold()."""
 
 class Sequence:
     """Poses and the ms to reach each, to play back."""

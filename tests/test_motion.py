@@ -324,6 +324,22 @@ class Safety(Tidy):
         self.assertEqual(moves(w)[-1][1], {1: 604})
         self.assertEqual(w.sim.limp, {2})
 
+    def test_hold_drops_the_targets_not_yet_sent_and_sends_nothing(self):
+        w, bus = world()
+        a = arm(bus)
+        a.stream({"base": 20})
+        self.assertTrue(a.step())
+        settle(w, bus, 100)
+        a.stream({"base": 40})  # not yet sent: a dead-man's hold() drops it
+        a.hold()
+        self.assertFalse(a.step())
+        settle(w, bus, 100)
+        self.assertEqual([m[1] for m in moves(w)], [{1: 583}])
+        a.stream({"shoulder": 0})  # afresh: only what comes after
+        self.assertTrue(a.step())
+        settle(w, bus, 100)
+        self.assertEqual(moves(w)[-1][1], {2: 515})
+
 
 class Stream(Tidy):
     def run_loop(self, w, bus, robot, seconds, tick_ms=10):
