@@ -10,6 +10,7 @@
 #   w.arrivals()                     # (us, frame): when each frame was in
 #   w.noise(b"\x55\x55\x05")         # faults: noise, drop, cut_reply, late,
 #   w.uart.fail("readinto", OSError(5)), w.uart.during(...), w.uart.stall(True)
+#   wire.World("rp2", clock=wire.RealClock(), call_us=0)   # the same, live, on real time
 #
 # Time is whole microseconds (w.clock.now_us), and nothing real is used: the
 # same test gives the same bytes at the same times, every run. Each ticks read
@@ -88,6 +89,7 @@
 # - Faults act on what the controller says after they are set: a reply already
 #   on its way is not cut, dropped or delayed. cut_reply() acts before drop().
 import asyncio
+import time
 
 import busservo_sim
 
@@ -164,6 +166,26 @@ class Clock:
 
     def advance_us(self, us):
         self.now_us += us
+
+
+class RealClock(Clock):
+    """The same clock on real time (the unix port's): for a world that runs live,
+    such as the web panel's server under a browser test. Where the world moves
+    the clock on (a UART call that waits), it sleeps until then."""
+
+    def __init__(self, start="wrap"):
+        self._t0 = time.ticks_us()
+        super().__init__(start, cost_us=0)
+
+    @property
+    def now_us(self):
+        return time.ticks_diff(time.ticks_us(), self._t0)
+
+    @now_us.setter
+    def now_us(self, t):
+        ahead = t - time.ticks_diff(time.ticks_us(), self._t0)
+        if ahead > 0:
+            time.sleep_us(ahead)
 
 
 class _Ring:
@@ -781,6 +803,7 @@ class World:
         rxbuf=None,
         hang_ms=1000,
         hang="return",
+        clock=None,
         **sim,
     ):
         if port not in PORTS:
@@ -789,7 +812,7 @@ class World:
         self.baudrate = baudrate
         self.call_us = call_us
         self.byte_us = 10000000 // baudrate  # (a byte takes this or 1 us more)
-        self.clock = Clock(start, cost_us)
+        self.clock = clock or Clock(start, cost_us)  # RealClock(): a live world
         self._t = 0  # how far the wire has been brought
         self._tx_line = _Line(baudrate)
         self._tx_busy = False
