@@ -8,6 +8,10 @@
 # (UART0 is the REPL's; UART1's default pins are the flash's on most modules.)
 from machine import UART, Pin
 
+# examples/web_panel.py joins this Wi-Fi network (a Pico W or an ESP32); without WIFI it
+# starts an access point of its own, "busservo".
+# WIFI = ("network name", "its password")
+
 
 def uart():
     return UART(2, baudrate=9600, tx=17, rx=16)

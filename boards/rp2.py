@@ -8,6 +8,10 @@
 # a divider (1k in series, 2k to GND) on it. boards/README.md and wiring-pico.svg.
 from machine import UART, Pin
 
+# examples/web_panel.py joins this Wi-Fi network (a Pico W or an ESP32); without WIFI it
+# starts an access point of its own, "busservo".
+# WIFI = ("network name", "its password")
+
 
 def uart():
     return UART(0, baudrate=9600, tx=Pin(0), rx=Pin(1))

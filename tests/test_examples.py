@@ -25,13 +25,31 @@ EXPECT = {
     "stream.py": "updates/s (the wire's limit for 6 servos: 38.4)",
     "teach.py": "the joints are limp: pose the robot by hand",
     "unload.py": "posed at",
+    "web_panel.py": "open http://127.0.0.1:18099/ and log in with the password test-pw-1",
 }
+
+# The examples that run until Ctrl-C, with their arguments: run for a few seconds, then
+# stopped by a SIGINT, as a Ctrl-C would (exit status 130). Nothing moves until a browser
+# asks: tests/test_web.py and tests/browser.py drive the panel.
+FOR_EVER = {"web_panel.py": "--port 18099 --password test-pw-1"}
+
+
+def command(example):
+    """The shell command that runs example (a path) as the tests do."""
+    name = example.rpartition("/")[2]
+    if name not in FOR_EVER:
+        return "sh boards/unix.sh " + example
+    return "timeout -s INT --preserve-status 3 sh boards/unix.sh %s %s; [ $? = 130 -o $? = 0 ]" % (
+        example,
+        FOR_EVER[name],
+    )
+
 
 # The examples that move servos (or let them go limp); the others move nothing.
 MOVING = ("async_demo.py", "demo.py", "group.py", "move.py", "move_many.py", "unload.py")
 # The motion layer's: on a board their joints turn at most 30 degrees a second (DPS), which
 # their moves' times show, rather than 2 s a move (a stream's frames take ~26 ms each).
-MOTION = ("playback.py", "stream.py", "teach.py")
+MOTION = ("playback.py", "stream.py", "teach.py", "web_panel.py")
 MOVING += MOTION
 
 # The controller's commands that make servos move (or go limp).
@@ -77,7 +95,7 @@ class Board:
 
     def run(self, example):
         """Run example (a path) with this board.py on MICROPYPATH: (ok, what it printed)."""
-        return sh("MICROPYPATH=%s sh boards/unix.sh %s" % (self.dir, example))
+        return sh("export MICROPYPATH=%s; %s" % (self.dir, command(example)))
 
     def commands(self):
         """[(cmd, params)] the controller took, in order."""
@@ -118,7 +136,7 @@ class Examples(unittest.TestCase):
 
     def test_with_no_board_py_each_runs_on_the_simulator_and_says_so_first(self):
         for name, text in EXPECT.items():
-            ok, out = sh("sh boards/unix.sh examples/" + name)
+            ok, out = sh(command("examples/" + name))
             self.assertTrue(ok, name + ": " + out)
             self.assertEqual(out.split("\n")[0], SIMULATED, name)
             self.assertIn(text, out, name)
@@ -177,6 +195,8 @@ class Examples(unittest.TestCase):
 
     def test_on_a_board_with_the_opt_in_moves_take_2_s_or_more(self):
         for name in MOVING:
+            if name in FOR_EVER:
+                continue  # it moves what a browser asks: tests/test_web.py
             board = Board()
             try:
                 ok, out = board.run(board.opted_in(name))

@@ -10,8 +10,9 @@ import busservo
 import busservo_async
 import busservo_motion
 import busservo_sim
+import busservo_web
 
-MODULES = (busservo, busservo_async, busservo_sim, busservo_motion)
+MODULES = (busservo, busservo_async, busservo_sim, busservo_motion, busservo_web)
 
 # AsyncBusServo.__getattr__ forwards to its BusServo: its stub declares what it forwards, with
 # the signatures of BusServo's methods. {class: (the module, the class it forwards to)}
@@ -39,6 +40,7 @@ def instances():
         "Robot": robot,
         "Sequence": sequence,
         "Player": sequence.play(robot),
+        "Panel": busservo_web.Panel(robot, "a password"),
     }
 
 

@@ -1,0 +1,50 @@
+"""busservo_web: a control panel for a busservo_motion.Robot, served by the board itself to a
+browser on the same Wi-Fi (or on the board's own access point), on asyncio and Microdot. An
+optional module: it needs busservo, busservo_motion, Microdot, and its page
+busservo_web.html.gz beside it (the README's mip command brings them all).
+
+    import asyncio, busservo_web
+    asyncio.run(busservo_web.serve(robot, "a password of yours", port=80))
+
+The page: a slider per joint, live positions (about 5 a second), the battery, limp, capture,
+a sequence to add poses to, play (loop, speed), save and load, and a STOP button (Esc) that
+lets every joint go limp. Nothing moves until the page is armed; when the armed page goes
+silent for a second (tab closed, Wi-Fi gone), the stream stops and the joints hold.
+Without the password only the page is served; every other request gets 401.
+"""
+
+from typing import Any
+
+from busservo import BusServo
+from busservo_motion import Player, Robot, Sequence
+
+async def serve(robot: Robot, password: str, port: int = 80) -> None:
+    """Serve the panel for robot on port, on every interface, until cancelled. password: a
+    str of 8 or more characters, which the page asks for (ValueError otherwise). Sets
+    Microdot's Request.max_content_length and max_body_length to 1024 bytes."""
+
+class Panel:
+    """The panel's state and its loop; serve() makes one. Its app is the Microdot app."""
+
+    robot: Robot
+    bus: BusServo
+    armed: str | None
+    """The session token of the page that armed the panel, or None."""
+    sequence: Sequence
+    """The sequence the page builds and plays."""
+    player: Player | None
+    error: str | None
+    """The last error of the panel's loop, shown on the page."""
+    limp: bool
+    """The joints were let go (limp or stop) and not moved since."""
+    app: Any
+    def __init__(self, robot: Robot, password: str) -> None: ...
+    def disarm(self) -> None:
+        """Stop driving: the stream ends (the joints hold) and the sequence stops."""
+    def estop(self) -> None:
+        """disarm(), then Robot.estop(): every joint limp."""
+    def state(self) -> dict[str, Any]:
+        """What GET /api/state answers: positions in degrees, battery, armed, the sequence."""
+    async def run(self) -> None:
+        """The panel's loop, for ever: the bus's replies, the stream, the player, the
+        dead-man, and position and battery requests."""

@@ -1,0 +1,474 @@
+# The web panel (lib/busservo_web.py), running: its server on the wire-faithful world,
+# live (tests/web_world.py: an rp2's UART, the 9600-baud line and the simulated controller,
+# on real time), asked by a client in the same process, as a browser or an attacker would.
+# What a real browser does with the page is tests/browser.py's (run by test_browser.py).
+import asyncio
+import os
+import time
+import unittest
+
+import deflate
+
+import busservo
+import busservo_motion as bm
+import busservo_web
+import web_world
+from busservo import CMD_ACTION_GROUP_STOP, CMD_MULT_SERVO_UNLOAD, CMD_SERVO_MOVE
+from web_world import http, login
+
+PASSWORD = "secret-pw"
+_ports = iter(range(18100, 18400))
+MOVING = (CMD_SERVO_MOVE, CMD_MULT_SERVO_UNLOAD, CMD_ACTION_GROUP_STOP)
+
+# Every route of the panel but the page and the login: (method, path, body).
+ROUTES = (
+    ("GET", "/api/joints", None),
+    ("GET", "/api/state", None),
+    ("GET", "/api/sequences", None),
+    ("POST", "/api/arm", {"on": True}),
+    ("POST", "/api/target", {"targets": {"base": 30}}),
+    ("POST", "/api/estop", {}),
+    ("POST", "/api/limp", {}),
+    ("POST", "/api/capture", {}),
+    ("POST", "/api/add", {"ms": 500}),
+    ("POST", "/api/remove", {"index": 0}),
+    ("POST", "/api/clear", {}),
+    ("POST", "/api/play", {"speed": 1, "loop": True}),
+    ("POST", "/api/stop", {}),
+    ("POST", "/api/save", {"name": "x"}),
+    ("POST", "/api/load", {"name": "x"}),
+)
+
+
+def moves(world):
+    """The frames that moved or stopped a servo, as the controller received them."""
+    return [f for f in world.frames() if f[3] in MOVING]
+
+
+def at(world, robot, name, degrees):
+    """True if the controller has joint name's servo where degrees put it."""
+    joint = robot.joints[name]
+    return world.sim.position(joint.servo_id) == joint.position(degrees)
+
+
+def run(scenario):
+    """Run scenario(port, world, robot) against a panel served on a fresh world."""
+    world = web_world.live()
+    robot = web_world.robot(world)
+    port = next(_ports)
+
+    async def main():
+        server = asyncio.create_task(busservo_web.serve(robot, PASSWORD, port))
+        await asyncio.sleep_ms(50)
+        try:
+            await scenario(port, world, robot)
+        finally:
+            server.cancel()
+            await asyncio.sleep_ms(20)
+
+    asyncio.new_event_loop()
+    asyncio.run(main())
+
+
+async def until(test, ms=2000):
+    """Wait until test() is true (polling every 10 ms); return it, or False after ms."""
+    start = time.ticks_ms()
+    while time.ticks_diff(time.ticks_ms(), start) < ms:
+        if test():
+            return True
+        await asyncio.sleep_ms(10)
+    return False
+
+
+async def armed(port):
+    token = await login(port)
+    status, reply = await http(port, "POST", "/api/arm", {"on": True}, token)
+    assert status == 200 and reply["armed"], (status, reply)
+    return token
+
+
+class Tidy(unittest.TestCase):
+    def tearDown(self):
+        busservo.time = bm.time = time
+
+
+class Page(Tidy):
+    def test_the_page_is_served_gzipped_from_the_board_and_needs_nothing_else(self):
+        async def scenario(port, world, robot):
+            status, page = await http(port, "GET", "/")
+            self.assertEqual(status, 200)
+            with open("lib/busservo_web.html", "rb") as f:
+                source = f.read()
+            import io
+
+            html = deflate.DeflateIO(io.BytesIO(page), deflate.GZIP).read()
+            self.assertEqual(html, source, "busservo_web.html.gz is stale: " + REBUILD)
+            self.assertTrue(len(page) <= 12 * 1024, "%d bytes gzipped" % len(page))
+            for outside in (b"http:", b"https:", b"//cdn", b"@import", b"url("):
+                self.assertFalse(outside in html, outside)  # no CDN, font or script from elsewhere
+
+        run(scenario)
+
+    def test_the_page_says_it_may_not_be_framed(self):
+        async def scenario(port, world, robot):
+            reader, writer = await asyncio.open_connection("127.0.0.1", port)
+            await writer.awrite(b"HEAD / HTTP/1.0\r\n\r\n")
+            head = b""
+            while True:
+                part = await reader.read(1024)
+                if not part:
+                    break
+                head += part
+            await writer.aclose()
+            self.assertIn(b"X-Frame-Options: DENY", head)
+            self.assertIn(b"Content-Encoding: gzip", head)
+
+        run(scenario)
+
+
+REBUILD = "gzip -9 -n -c lib/busservo_web.html > lib/busservo_web.html.gz"
+
+
+class Security(Tidy):
+    def test_without_the_password_every_route_is_refused_and_nothing_moves(self):
+        async def scenario(port, world, robot):
+            before = len(moves(world))
+            for token in (None, "0" * 32, "", "Bearer", "x" * 500):
+                for method, path, body in ROUTES:
+                    status, reply = await http(port, method, path, body, token)
+                    self.assertEqual(status, 401, (method, path, token, reply))
+                    self.assertEqual(reply, {"error": "log in first"})
+            for path in (
+                "/lib/busservo_web.py",
+                "/busservo_web.html.gz",
+                "/../board.py",
+                "/api/../lib/busservo.py",
+                "/web_panel.txt",
+                "/sequences/x.json",
+            ):
+                status, reply = await http(port, "GET", path)
+                self.assertEqual(status, 401, path)
+            await asyncio.sleep_ms(100)
+            self.assertEqual(len(moves(world)), before)
+            self.assertEqual(robot.updates, 0)
+
+        run(scenario)
+
+    def test_a_wrong_password_gets_401_and_the_right_one_a_token(self):
+        async def scenario(port, world, robot):
+            for wrong in ("", "secret-p", "secret-pw ", "SECRET-PW", "x" * 1000, None, 5):
+                status, reply = await http(port, "POST", "/api/login", {"password": wrong})
+                self.assertEqual(status, 401, wrong)
+                self.assertFalse("token" in reply)
+            status, reply = await http(port, "POST", "/api/login", raw=b"password=secret-pw")
+            self.assertEqual(status, 400)
+            token = await login(port)
+            self.assertEqual(len(token), 32)
+            status, reply = await http(port, "GET", "/api/joints", token=token)
+            self.assertEqual(status, 200)
+            self.assertEqual([j["name"] for j in reply], ["base", "shoulder", "elbow", "claw"])
+            self.assertEqual(reply[3], {"name": "claw", "lo": 0, "hi": 60})
+
+        run(scenario)
+
+    def test_the_password_is_compared_in_a_time_that_tells_nothing(self):
+        # _same() goes through every byte of the guess, whatever matched: its work
+        # depends on the guess's length alone.
+        same = busservo_web._same
+        self.assertTrue(same(b"secret-pw", b"secret-pw"))
+        for guess in (b"", b"s", b"secret-p", b"secret-pw!", b"xecret-pw", b"secret-pX"):
+            self.assertFalse(same(guess, b"secret-pw"), guess)
+        self.assertFalse(same(b"", b""))
+        # No early exit: a guess wrong at its first byte costs what one wrong at its last does.
+        calls = []
+
+        class Counting:
+            def __init__(self, data):
+                self.data = data
+
+            def __len__(self):
+                return len(self.data)
+
+            def __getitem__(self, i):
+                calls.append(i)
+                return self.data[i]
+
+        for guess in (b"Xecret-pw", b"secret-pX"):
+            calls.clear()
+            same(Counting(guess), b"secret-pw")
+            self.assertEqual(calls, list(range(9)), guess)
+
+    def test_serve_wants_a_password_of_8_or_more_characters(self):
+        world = web_world.live()
+        robot = web_world.robot(world)
+        for bad in (None, "", "short", b"bytes-password", 12345678):
+            try:
+                busservo_web.Panel(robot, bad)
+            except ValueError as e:
+                self.assertIn("password must be a str of 8 or more characters, got", str(e))
+            else:
+                self.fail("no ValueError for %r" % (bad,))
+
+    def test_sessions_are_few_and_the_oldest_is_forgotten(self):
+        async def scenario(port, world, robot):
+            tokens = []
+            for _ in range(5):
+                tokens.append(await login(port))
+            status, _ = await http(port, "GET", "/api/state", token=tokens[0])
+            self.assertEqual(status, 401)
+            for token in tokens[1:]:
+                status, _ = await http(port, "GET", "/api/state", token=token)
+                self.assertEqual(status, 200)
+
+        run(scenario)
+
+
+class BadInput(Tidy):
+    def test_bad_targets_get_400_move_nothing_and_the_server_goes_on(self):
+        async def scenario(port, world, robot):
+            token = await armed(port)
+            before = len(moves(world))
+            cases = (
+                ({"targets": {"wrist": 10}}, "no joint 'wrist'"),
+                ({"targets": {"base": 121}}, "targets['base'] must be in -120.0..120.0, got 121"),
+                ({"targets": {"claw": -1}}, "targets['claw'] must be in 0..60, got -1"),
+                ({"targets": {"base": "10"}}, "targets['base'] must be a number, got '10'"),
+                ({"targets": {"base": None}}, "targets['base'] must be a number, got None"),
+                ({"targets": {"base": True}}, "targets['base'] must be a number, got True"),
+                ({"targets": {"base": 1e300}}, "targets['base'] must be a number"),
+                ({"targets": {}}, "targets must be {joint: degrees}, got {}"),
+                ({"targets": [10, 20]}, "targets must be {joint: degrees}"),
+                ({}, "targets must be {joint: degrees}, got None"),
+                ({"targets": {"base": 10, "wrist": 1}}, "no joint 'wrist'"),
+            )
+            for body, why in cases:
+                status, reply = await http(port, "POST", "/api/target", body, token)
+                self.assertEqual(status, 400, body)
+                self.assertIn(why, reply["error"])
+            raws = (
+                b'{"targets": {"base": NaN}}',
+                b'{"targets": {"base": Infinity}}',
+                b'{"targets": {"base": 1e999}}',
+                b'{"targets": {"base": 10}',
+                b"not json",
+                b"[1, 2]",
+                b'"a string"',
+                b"\xff\xfe",
+            )
+            for raw in raws:
+                status, reply = await http(port, "POST", "/api/target", token=token, raw=raw)
+                self.assertEqual(status, 400, raw)
+                self.assertIn("error", reply)
+            status, reply = await http(
+                port, "POST", "/api/target", token=token, raw=b'{"x": "' + b"a" * 2000 + b'"}'
+            )
+            self.assertEqual(status, 413)
+            status, reply = await http(port, "POST", "/api/add", {"ms": -1}, token)
+            self.assertEqual((status, reply["error"]), (400, "ms must be in 0..65535, got -1"))
+            status, reply = await http(port, "POST", "/api/play", {"speed": 0}, token)
+            self.assertEqual(status, 400)
+            status, reply = await http(port, "POST", "/api/arm", {"on": "yes"}, token)
+            self.assertEqual((status, reply["error"]), (400, "on must be a bool, got 'yes'"))
+            await asyncio.sleep_ms(100)
+            self.assertEqual(len(moves(world)), before)
+            status, reply = await http(port, "GET", "/api/state", token=token)
+            self.assertEqual(status, 200)  # still serving
+            self.assertTrue(reply["armed"])
+
+        run(scenario)
+
+    def test_a_malformed_request_gets_4xx_and_the_server_goes_on(self):
+        async def scenario(port, world, robot):
+            token = await login(port)
+            for raw in (
+                b"GARBAGE\r\n\r\n",
+                b"GET\r\n\r\n",
+                b"\r\n\r\n",
+                b"\x00\xff" * 40,
+                b"GET / HTTP/1.0\r\nbroken header\r\n\r\n",
+                b"POST /api/state HTTP/1.0\r\nContent-Length: x\r\n\r\n",
+                b"GET /" + b"a" * 3000 + b" HTTP/1.0\r\n\r\n",
+            ):
+                reader, writer = await asyncio.open_connection("127.0.0.1", port)
+                await writer.awrite(raw)
+                reply = await reader.read(200)
+                await writer.aclose()
+                self.assertTrue(reply == b"" or reply[9:10] in (b"4", b"5"), (raw, reply))
+            status, _ = await http(port, "GET", "/api/state", token=token)
+            self.assertEqual(status, 200)
+
+        run(scenario)
+
+    def test_too_many_clients_get_503_and_the_server_goes_on(self):
+        async def scenario(port, world, robot):
+            token = await login(port)
+            idle = []
+            for _ in range(4):  # clients that connect and say nothing
+                idle.append(await asyncio.open_connection("127.0.0.1", port))
+            await asyncio.sleep_ms(50)
+            status, reply = await http(port, "GET", "/api/state", token=token)
+            self.assertEqual((status, reply), (503, {"error": "too many clients"}))
+            for _, writer in idle:
+                await writer.aclose()
+            await asyncio.sleep_ms(50)
+            status, _ = await http(port, "GET", "/api/state", token=token)
+            self.assertEqual(status, 200)
+
+        run(scenario)
+
+    def test_sequence_names_cannot_leave_their_folder(self):
+        async def scenario(port, world, robot):
+            token = await login(port)
+            for name in ("../x", "a/b", "..", ".x", "", "x" * 25, "a b", "é", None, 3, "a\x00"):
+                for path in ("/api/save", "/api/load"):
+                    status, reply = await http(port, "POST", path, {"name": name}, token)
+                    self.assertEqual(status, 400, (path, name))
+                    self.assertIn("name must be 1..24 letters, digits, - or _", reply["error"])
+            status, reply = await http(port, "POST", "/api/load", {"name": "nothing"}, token)
+            self.assertEqual((status, reply["error"]), (404, "no sequence 'nothing'"))
+
+        run(scenario)
+
+
+class Driving(Tidy):
+    def test_nothing_moves_until_armed_then_a_slider_drag_reaches_the_servo(self):
+        async def scenario(port, world, robot):
+            token = await login(port)
+            status, reply = await http(
+                port, "POST", "/api/target", {"targets": {"base": 30}}, token
+            )
+            self.assertEqual(status, 409)
+            self.assertIn("arm the panel first", reply["error"])
+            await asyncio.sleep_ms(100)
+            self.assertEqual(moves(world), [])
+            await http(port, "POST", "/api/arm", {"on": True}, token)
+            self.assertEqual(moves(world), [])  # arming moves nothing
+            for degrees in range(0, 31, 5):  # a drag: the latest wins
+                await http(port, "POST", "/api/target", {"targets": {"base": degrees}}, token)
+                await asyncio.sleep_ms(20)
+            self.assertTrue(await until(lambda: at(world, robot, "base", 30)))
+            status, reply = await http(port, "GET", "/api/state", token=token)
+            self.assertTrue(await until(lambda: robot.bus.positions.get(1) == 625))
+
+        run(scenario)
+
+    def test_only_the_page_that_armed_drives(self):
+        async def scenario(port, world, robot):
+            mine = await armed(port)
+            other = await login(port)
+            status, reply = await http(port, "POST", "/api/arm", {"on": True}, other)
+            self.assertEqual(status, 409)
+            status, reply = await http(
+                port, "POST", "/api/target", {"targets": {"base": 9}}, other
+            )
+            self.assertEqual(status, 409)
+            status, reply = await http(port, "POST", "/api/estop", {}, other)  # but stop, yes
+            self.assertEqual(status, 200)
+            self.assertFalse(reply["armed"])
+            status, reply = await http(port, "POST", "/api/target", {"targets": {"base": 9}}, mine)
+            self.assertEqual(status, 409)  # the stop disarmed it
+
+        run(scenario)
+
+    def test_the_dead_man_holds_within_a_second_of_silence(self):
+        async def scenario(port, world, robot):
+            token = await armed(port)
+            for degrees in range(0, 41, 2):
+                await http(port, "POST", "/api/target", {"targets": {"base": degrees}}, token)
+                await asyncio.sleep_ms(30)
+            # The page goes silent (tab closed, Wi-Fi gone): within about 1 s, disarmed.
+            silent = time.ticks_ms()
+            self.assertTrue(await until(lambda: busservo_web_armed(robot) is False, 1500))
+            took = time.ticks_diff(time.ticks_ms(), silent)
+            self.assertTrue(900 <= took <= 1200, took)
+            sent = robot.updates
+            await asyncio.sleep_ms(300)
+            self.assertEqual(robot.updates, sent)  # the stream stopped
+            status, reply = await http(
+                port, "POST", "/api/target", {"targets": {"base": 0}}, token
+            )
+            self.assertEqual(status, 409)  # and stays so until armed again
+
+        run(scenario)
+
+    def test_stop_mid_sequence_lets_every_joint_go_limp(self):
+        async def scenario(port, world, robot):
+            token = await armed(port)
+            for degrees in (20, -20):
+                await http(port, "POST", "/api/target", {"targets": {"base": degrees}}, token)
+                await until(lambda d=degrees: at(world, robot, "base", d))
+                status, reply = await http(port, "POST", "/api/add", {"ms": 400}, token)
+                self.assertEqual(status, 200)
+            self.assertEqual(reply["steps"], [400, 400])
+            status, reply = await http(port, "POST", "/api/play", {"loop": True}, token)
+            self.assertEqual(status, 200, reply)
+            await asyncio.sleep_ms(600)  # mid-sequence
+            status, reply = await http(port, "POST", "/api/estop", {}, token)
+            self.assertEqual(status, 200)
+            self.assertEqual(
+                (reply["playing"], reply["armed"], reply["limp"]), (None, False, True)
+            )
+            self.assertTrue(await until(lambda: world.sim.limp == {1, 2, 3, 4}, 200))
+            count = len(moves(world))
+            await asyncio.sleep_ms(500)
+            self.assertEqual(len(moves(world)), count)  # nothing more was sent
+
+        run(scenario)
+
+    def test_two_poses_recorded_play_back_and_are_saved_and_loaded(self):
+        async def scenario(port, world, robot):
+            token = await armed(port)
+            for degrees in (30, -30):
+                await http(port, "POST", "/api/target", {"targets": {"elbow": degrees}}, token)
+                await until(lambda d=degrees: at(world, robot, "elbow", d))
+                await http(port, "POST", "/api/add", {"ms": 300}, token)
+            status, reply = await http(port, "POST", "/api/save", {"name": "wave_1"}, token)
+            self.assertEqual(status, 200)
+            await http(port, "POST", "/api/clear", {}, token)
+            status, reply = await http(port, "POST", "/api/load", {"name": "wave_1"}, token)
+            self.assertEqual(reply["steps"], [300, 300])
+            status, names = await http(port, "GET", "/api/sequences", token=token)
+            self.assertIn("wave_1", names)
+            before = len(moves(world))
+            status, reply = await http(port, "POST", "/api/play", {}, token)
+            self.assertEqual(status, 200)
+            self.assertTrue(await until(lambda: busservo_web_playing(robot) is None, 1500))
+            played = [
+                (f[5] | f[6] << 8, {f[i]: f[i + 1] | f[i + 2] << 8 for i in range(7, len(f), 3)})
+                for f in moves(world)[before:]
+            ]  # the elbow to 30 degrees (625), then -30 (375), 300 ms each; the rest at 0 (500)
+            self.assertEqual(
+                played,
+                [(300, {1: 500, 2: 500, 3: 625, 4: 500}), (300, {1: 500, 2: 500, 3: 375, 4: 500})],
+            )
+            self.assertTrue(await until(lambda: at(world, robot, "elbow", -30), 500))
+
+        try:
+            run(scenario)
+        finally:
+            try:
+                os.remove("sequences/wave_1.json")
+                os.rmdir("sequences")
+            except OSError:
+                pass
+
+
+def busservo_web_armed(robot):
+    return _panels[-1].armed is not None if _panels else None
+
+
+def busservo_web_playing(robot):
+    return _panels[-1].player if _panels else None
+
+
+# The panels serve() makes, seen by the tests through Panel's own state.
+_panels = []
+_Panel_init = busservo_web.Panel.__init__
+
+
+def _init(self, *args):
+    _Panel_init(self, *args)
+    _panels.append(self)
+
+
+busservo_web.Panel.__init__ = _init
