@@ -10,13 +10,42 @@ verbose=""
 cd "$(dirname "$0")/.."
 sh boards/unix.sh --setup || exit 1
 
+sudo=""
+[ "$(id -u)" = 0 ] || sudo="sudo -n"
+updated=""
+# apt_install WHAT PACKAGES...: install Debian's packages (apt-get update once a run).
+apt_install() {
+    what=$1
+    shift
+    command -v apt-get >/dev/null 2>&1 || return 1
+    echo "tests/run.sh: installing $what (Debian's $*)" >&2
+    if [ -z "$updated" ]; then
+        $sudo apt-get update -qq >/dev/null 2>&1 || return 1
+        updated=1
+    fi
+    $sudo apt-get install -y -qq "$@" >/dev/null 2>&1
+}
+
 # socat (a Debian package) puts the unix port's REPL behind a pty for the mpremote test.
-if ! command -v socat >/dev/null 2>&1 && command -v apt-get >/dev/null 2>&1; then
-    echo "tests/run.sh: installing socat" >&2
-    sudo=""
-    [ "$(id -u)" = 0 ] || sudo="sudo -n"
-    { $sudo apt-get update -qq && $sudo apt-get install -y -qq socat; } >/dev/null 2>&1 ||
+if ! command -v socat >/dev/null 2>&1; then
+    apt_install socat socat ||
         echo "tests/run.sh: could not install socat: the mpremote test will be skipped" >&2
+fi
+
+# The web panel's browser tests (tests/browser.py): Selenium (pinned) from PyPI drives Debian's
+# Chromium through its chromedriver; no browser is downloaded. Without them those tests skip,
+# saying so.
+SELENIUM=4.50.0
+have=$(.venv/bin/python -c 'import selenium; print(selenium.__version__)' 2>/dev/null)
+if [ "$have" != "$SELENIUM" ]; then
+    echo "tests/run.sh: installing selenium $SELENIUM into .venv/ (for the browser tests)" >&2
+    .venv/bin/pip install --disable-pip-version-check -q "selenium==$SELENIUM" \
+        >>.venv/setup.log 2>&1 ||
+        echo "tests/run.sh: could not install selenium: the browser tests will be skipped" >&2
+fi
+if [ ! -x /usr/bin/chromium ] || [ ! -x /usr/bin/chromedriver ]; then
+    apt_install "the browser for the web panel's tests (a few minutes)" chromium chromium-driver ||
+        echo "tests/run.sh: could not install chromium: the browser tests will be skipped" >&2
 fi
 
 # resvg-py (a wheel with the resvg renderer compiled in: no system library) lets

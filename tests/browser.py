@@ -1,0 +1,337 @@
+# The web panel as a person uses it: Debian's Chromium, headless, driven by Selenium (both
+# installed by tests/run.sh), on a phone-sized screen, against the panel served by
+# tests/web_world.py (the simulated controller behind the wire-faithful world, live).
+# CPython, not MicroPython: tests/test_browser.py runs this once and reads its verdicts.
+#
+#   .venv/bin/python tests/browser.py [SCREENSHOT.png]
+#
+# Each test logs in afresh; the controller's own view (where each servo is, which are
+# limp) comes from web_world.py's probe port, what the panel says from its /api/state.
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+import unittest
+import urllib.error
+import urllib.request
+
+try:
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.common.keys import Keys
+except ImportError:
+    webdriver = None  # main() says so, and skips
+
+CHROMIUM = "/usr/bin/chromium"
+CHROMEDRIVER = "/usr/bin/chromedriver"
+PORT = 18201
+PROBE = 18202
+PASSWORD = "browser-pw-7"
+URL = "http://127.0.0.1:%d/" % PORT
+SCREENSHOT = sys.argv[1] if len(sys.argv) > 1 else None
+DEAD_MS = 1000  # the panel's dead-man time
+
+
+def controller():
+    """The controller's state: {"at": {"1": position, ...}, "limp": [ids]}."""
+    with urllib.request.urlopen("http://127.0.0.1:%d/" % PROBE, timeout=5) as r:
+        return json.load(r)
+
+
+def panel_state():
+    """The panel's /api/state, as a second page (logged in here) sees it."""
+
+    def call(path, body=None, token=None):
+        request = urllib.request.Request(
+            URL.rstrip("/") + path,
+            data=None if body is None else json.dumps(body).encode(),
+            headers={"Content-Type": "application/json"},
+        )
+        if token:
+            request.add_header("Authorization", "Bearer " + token)
+        with urllib.request.urlopen(request, timeout=5) as r:
+            return json.load(r)
+
+    global _token
+    for _ in range(2):
+        if _token is None:
+            _token = call("/api/login", {"password": PASSWORD})["token"]
+        try:
+            return call("/api/state", token=_token)
+        except urllib.error.HTTPError as e:
+            if e.code != 401:
+                raise
+            _token = None  # the browsers' logins made the panel forget this one
+    raise AssertionError("cannot log in to the panel")
+
+
+_token = None
+
+
+def until(test, seconds=3.0):
+    """Wait until test() is true; return how long it took (s), or None."""
+    start = time.monotonic()
+    while time.monotonic() - start < seconds:
+        if test():
+            return time.monotonic() - start
+        time.sleep(0.02)
+    return None
+
+
+def position(degrees):
+    """A bus servo's position for degrees (Joint(1): 25/6 positions a degree, 500 at 0)."""
+    return round(500 + degrees * 25 / 6)
+
+
+class Panel(unittest.TestCase):
+    server = None
+
+    @classmethod
+    def setUpClass(cls):
+        log = cls.log = open(os.environ.get("TMPDIR", "/tmp") + "/busservo-web-world.log", "w")
+        cls.server = subprocess.Popen(
+            [
+                "sh",
+                "boards/unix.sh",
+                "tests/web_world.py",
+                "--port",
+                str(PORT),
+                "--password",
+                PASSWORD,
+                "--probe",
+                str(PROBE),
+            ],
+            stdout=log,
+            stderr=subprocess.STDOUT,
+        )
+        ok = until(lambda: _listening(PROBE) and _listening(PORT), 20)
+        assert ok is not None, "the panel's server did not start (see %s)" % log.name
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.server.terminate()
+        cls.server.wait()
+        cls.log.close()
+
+    def setUp(self):
+        options = webdriver.ChromeOptions()
+        options.binary_location = CHROMIUM
+        for flag in (
+            "--headless=new",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--disable-dev-shm-usage",
+        ):
+            options.add_argument(flag)
+        options.add_argument("--user-data-dir=" + _fresh_dir())
+        # A phone: 390 x 844 CSS pixels, touch.
+        options.add_experimental_option(
+            "mobileEmulation",
+            {"deviceMetrics": {"width": 390, "height": 844, "pixelRatio": 2.0, "touch": False}},
+        )
+        self.browser = webdriver.Chrome(service=Service(CHROMEDRIVER), options=options)
+        self.browser.set_window_size(390, 844)
+        self.addCleanup(self.browser.quit)
+
+    # What a person does.
+
+    def open_and_log_in(self):
+        b = self.browser
+        b.get(URL)
+        self.assertTrue(b.find_element(By.ID, "login").is_displayed())
+        self.assertFalse(b.find_element(By.ID, "panel").is_displayed())
+        b.find_element(By.ID, "pw").send_keys(PASSWORD + Keys.ENTER)
+        self.assertIsNotNone(until(lambda: len(self.sliders()) == 4), "no sliders after login")
+
+    def sliders(self):
+        return self.browser.find_elements(By.CSS_SELECTOR, "input[type=range]")
+
+    def slider(self, name):
+        return self.browser.find_element(By.ID, "j-" + name)
+
+    def arm(self):
+        self.browser.find_element(By.ID, "armed").click()
+        self.assertIsNotNone(until(lambda: panel_state()["armed"]), "the panel did not arm")
+        self.assertIsNotNone(until(lambda: self.slider("base").is_enabled()))
+
+    def drag(self, name, dx, release=True):
+        """Drag joint name's slider's thumb dx pixels from its middle: its value after."""
+        s = self.slider(name)
+        actions = ActionChains(self.browser).click_and_hold(s)
+        for _ in range(5):
+            actions.move_by_offset(dx // 5, 0).pause(0.05)
+        if release:
+            actions.release()
+        actions.perform()
+        return float(s.get_attribute("value"))
+
+    def press(self, element_id):
+        self.browser.find_element(By.ID, element_id).click()
+
+    def reached(self, servo_id, degrees):
+        return controller()["at"][str(servo_id)] == position(degrees)
+
+    def add_pose_at(self, degrees):
+        """Drag the base to about degrees, wait until it is there, add it to the sequence."""
+        s = self.slider("base")
+        ActionChains(self.browser).click_and_hold(s).move_by_offset(
+            round(degrees / 240 * s.size["width"]), 0
+        ).release().perform()
+        value = float(s.get_attribute("value"))
+        self.assertIsNotNone(until(lambda: self.reached(1, value)), value)
+        count = len(self.browser.find_elements(By.CSS_SELECTOR, "#steps li"))
+        self.press("add")
+        self.assertIsNotNone(
+            until(lambda: len(self.browser.find_elements(By.CSS_SELECTOR, "#steps li")) > count)
+        )
+        return value
+
+    # The tests.
+
+    def test_1_nothing_moves_when_the_page_loads_or_logs_in(self):
+        before = controller()
+        self.open_and_log_in()
+        self.drag("base", 120)  # not armed: the slider is disabled, nothing is sent
+        time.sleep(0.5)
+        self.assertFalse(panel_state()["armed"])
+        self.assertEqual(controller()["at"], before["at"])
+        self.browser.refresh()  # a reload, logged in: still nothing
+        self.assertIsNotNone(until(lambda: len(self.sliders()) == 4))
+        time.sleep(0.3)
+        self.assertFalse(panel_state()["armed"])
+        self.assertEqual(controller()["at"], before["at"])
+
+    def test_2_armed_a_slider_drag_moves_the_simulated_servo_there(self):
+        self.open_and_log_in()
+        self.arm()
+        value = self.drag("base", 100)
+        self.assertTrue(value > 10, value)
+        took = until(lambda: self.reached(1, value), 6.0)  # the stream keeps to its speed
+        self.assertIsNotNone(took, "servo 1 never reached %s degrees: %s" % (value, controller()))
+        if SCREENSHOT:
+            time.sleep(0.5)  # the live positions caught up
+            self.browser.save_screenshot(SCREENSHOT)
+
+    def test_3_stop_mid_sequence_lets_every_joint_go_limp(self):
+        self.open_and_log_in()
+        self.arm()
+        self.add_pose_at(-40)
+        self.add_pose_at(40)
+        self.press("loop")
+        self.press("play")
+        self.assertIsNotNone(until(lambda: panel_state()["playing"] is not None))
+        time.sleep(0.7)  # mid-sequence
+        self.press("stop")
+        self.assertIsNotNone(until(lambda: controller()["limp"] == [1, 2, 3, 4], 1.0))
+        state = panel_state()
+        self.assertEqual((state["playing"], state["armed"]), (None, False))
+        frozen = controller()["at"]
+        time.sleep(0.5)
+        self.assertEqual(controller()["at"], frozen)  # limp: nothing drives them
+
+    def test_4_two_poses_recorded_play_back(self):
+        self.open_and_log_in()
+        self.arm()
+        self.press("clear")
+        first = self.add_pose_at(-50)
+        second = self.add_pose_at(50)
+        self.assertEqual(len(self.browser.find_elements(By.CSS_SELECTOR, "#steps li")), 2)
+        moved = controller()["moved"]
+        self.assertIsNotNone(until(lambda: self.browser.find_element(By.ID, "play").is_enabled()))
+        self.press("play")
+        self.assertIsNotNone(
+            until(lambda: controller()["moved"] > moved),
+            "nothing played: %s, the page says %r"
+            % (panel_state(), self.browser.find_element(By.ID, "msg").text),
+        )
+        self.assertIsNotNone(until(lambda: panel_state()["playing"] is None, 4.0))
+        self.assertIsNotNone(until(lambda: self.reached(1, second)), "not at the second pose")
+        c = controller()
+        played = c["moves"][len(c["moves"]) - (c["moved"] - moved) :]
+        # Each pose in 1000 ms (the page's "in 1000 ms"), the base to the first, then the second.
+        self.assertEqual(
+            [(ms, at["1"]) for ms, at in played],
+            [(1000, position(first)), (1000, position(second))],
+        )
+
+    def test_5_esc_is_the_stop_key(self):
+        self.open_and_log_in()
+        self.arm()
+        self.drag("elbow", 60)
+        self.browser.find_element(By.TAG_NAME, "body").send_keys(Keys.ESCAPE)
+        self.assertIsNotNone(until(lambda: controller()["limp"] == [1, 2, 3, 4], 1.0))
+        self.assertFalse(panel_state()["armed"])
+
+    def test_6_closing_the_tab_mid_drag_stops_the_stream_within_the_dead_man_time(self):
+        self.open_and_log_in()
+        self.arm()
+        self.drag("base", -80, release=False)  # the thumb still held
+        b = self.browser
+        panel = b.current_window_handle
+        b.switch_to.new_window("tab")
+        keep = b.current_window_handle
+        b.switch_to.window(panel)
+        b.close()  # the tab, mid-drag
+        b.switch_to.window(keep)
+        took = until(lambda: not panel_state()["armed"], 2.0)
+        self.assertIsNotNone(took, "still armed 2 s after the tab closed")
+        self.assertTrue(took <= DEAD_MS / 1000 + 0.3, took)
+        updates = panel_state()["updates"]
+        time.sleep(0.5)
+        self.assertEqual(panel_state()["updates"], updates)  # no frame since
+
+    def test_7_a_lost_connection_stops_the_stream_within_the_dead_man_time(self):
+        self.open_and_log_in()
+        self.arm()
+        self.drag("claw", 40)
+        # The Wi-Fi drops: the page can no longer reach the board (nor say goodbye).
+        self.browser.execute_cdp_cmd("Network.enable", {})
+        self.browser.execute_cdp_cmd(
+            "Network.emulateNetworkConditions",
+            {"offline": True, "latency": 0, "downloadThroughput": -1, "uploadThroughput": -1},
+        )
+        start = time.monotonic()
+        took = until(lambda: not panel_state()["armed"], 2.5)
+        self.assertIsNotNone(took, "still armed 2.5 s after the connection was lost")
+        # The last request may have come up to 200 ms before the drop (the page's poll).
+        self.assertTrue(0.6 <= time.monotonic() - start <= DEAD_MS / 1000 + 0.4, took)
+
+
+def _listening(port):
+    import socket
+
+    try:
+        socket.create_connection(("127.0.0.1", port), timeout=0.5).close()
+        return True
+    except OSError:
+        return False
+
+
+def _fresh_dir():
+    import tempfile
+
+    path = tempfile.mkdtemp(prefix="busservo-chromium-")
+    import atexit
+
+    atexit.register(shutil.rmtree, path, True)
+    return path
+
+
+if __name__ == "__main__":
+    missing = [p for p in (CHROMIUM, CHROMEDRIVER) if not os.path.exists(p)]
+    if missing:
+        print("SKIP: no %s (Debian's chromium and chromium-driver)" % " ".join(missing))
+        sys.exit(0)
+    if webdriver is None:
+        print("SKIP: no selenium in .venv/ (tests/run.sh installs it from PyPI)")
+        sys.exit(0)
+    unittest.main(argv=sys.argv[:1], verbosity=2)

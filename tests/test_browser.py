@@ -1,0 +1,67 @@
+# The web panel in a real browser: tests/browser.py (CPython, Selenium, Debian's headless
+# Chromium) run once, each of its tests a test here. Where the browser is missing (no apt to
+# install it with), each skips, saying why. Its screenshot of the panel on a phone-sized
+# screen goes to .venv/web_panel.png (the README's is examples/web_panel.png).
+import os
+import unittest
+
+from shell import sh
+
+SCREENSHOT = ".venv/web_panel.png"
+TESTS = (
+    "test_1_nothing_moves_when_the_page_loads_or_logs_in",
+    "test_2_armed_a_slider_drag_moves_the_simulated_servo_there",
+    "test_3_stop_mid_sequence_lets_every_joint_go_limp",
+    "test_4_two_poses_recorded_play_back",
+    "test_5_esc_is_the_stop_key",
+    "test_6_closing_the_tab_mid_drag_stops_the_stream_within_the_dead_man_time",
+    "test_7_a_lost_connection_stops_the_stream_within_the_dead_man_time",
+)
+
+_run = None
+
+
+def browser():
+    """(what browser.py printed, {test: verdict}), browser.py being run the first time."""
+    global _run
+    if _run is None:
+        ok, out = sh(".venv/bin/python tests/browser.py " + SCREENSHOT)
+        verdicts = {}
+        for line in out.split("\n"):
+            for name in TESTS:
+                if line.startswith(name + " ") and " ... " in line:
+                    verdicts[name] = line.rpartition(" ... ")[2].strip()
+        _run = (out, verdicts)
+    return _run
+
+
+class Browser(unittest.TestCase):
+    def check(self, name):
+        out, verdicts = browser()
+        if out.startswith("SKIP: "):
+            self.skipTest("NO BROWSER TEST: " + out.split("\n")[0][6:])
+        self.assertEqual(verdicts.get(name), "ok", out)
+
+
+def _test(name):
+    return lambda self: self.check(name)
+
+
+for _name in TESTS:
+    setattr(Browser, _name, _test(_name))
+
+
+class Screenshot(unittest.TestCase):
+    def test_the_panel_was_photographed_on_a_phone_sized_screen(self):
+        out, verdicts = browser()
+        if out.startswith("SKIP: "):
+            self.skipTest("NO BROWSER TEST: " + out.split("\n")[0][6:])
+        if verdicts.get(TESTS[1]) != "ok":  # the test that takes it
+            self.fail("no screenshot: %s did not pass" % TESTS[1])
+        with open(SCREENSHOT, "rb") as f:
+            png = f.read()
+        self.assertEqual(png[:8], b"\x89PNG\r\n\x1a\n")
+        width = int.from_bytes(png[16:20], "big")
+        height = int.from_bytes(png[20:24], "big")
+        self.assertEqual((width, height), (780, 1688))  # 390 x 844 CSS pixels, at 2x
+        os.remove(SCREENSHOT)
