@@ -2,16 +2,20 @@
 #     include("path/to/busservo/manifest.py")
 # or, with the simulated controller, the asyncio interface and the motion layer too,
 #     include("path/to/busservo/manifest.py", sim=True, asyncio=True, motion=True)
+# web=True freezes the web panel (busservo_web) too; it needs Microdot frozen or installed,
+# and its page copied to the board's filesystem: mpremote cp lib/busservo_web.html.gz :/lib/
 metadata(
     description="Driver for the serial Bus Servo Controller (LOBOT/Hiwonder, 0x55 0x55 frames).",
     version="0.1.0",
 )
-options.defaults(sim=False, asyncio=False, motion=False)
+options.defaults(sim=False, asyncio=False, motion=False, web=False)
 
 module("busservo.py", base_path="lib")
 if options.sim:
     module("busservo_sim.py", base_path="lib")
 if options.asyncio:
     module("busservo_async.py", base_path="lib")
-if options.motion:
+if options.motion or options.web:
     module("busservo_motion.py", base_path="lib")
+if options.web:
+    module("busservo_web.py", base_path="lib")
