@@ -20,8 +20,10 @@
 # login form): every other request gets 401 and does nothing. The password is
 # compared in constant time; a login gives the page a random token that it sends
 # with each request (Authorization: Bearer). Bad input gets a 4xx naming what was
-# wrong and moves nothing. At most _CLIENTS connections are served at once, each
-# for at most _CLIENT_MS (more get 503), and bodies over _BODY bytes get 413.
+# wrong and moves nothing. A connection has _HEAD_MS to send its request, of at
+# most _REQUEST bytes (a body of at most _BODY, else 413); at most _CLIENTS are
+# answered at once (more get 503), but a logged-in page always is: its STOP gets
+# through, whatever else the network sends.
 # Sequences are saved under sequences/ by a name of letters, digits, - and _.
 # Plain HTTP: anyone who can watch the Wi-Fi can read the password. Use a
 # network you trust, or the board's own access point with a WPA2 key.
@@ -43,8 +45,10 @@ from microdot import Microdot, Request, Response
 
 import busservo_motion as bm
 
-_CLIENTS = 4  # connections served at once; more get 503
-_CLIENT_MS = 10000  # a connection that takes longer is closed
+_CLIENTS = 4  # requests being read, and answered, at once
+_HEAD_MS = 1000  # a connection's request must be in within this, or it is closed
+_REQUEST = 4096  # bytes: a request's line, headers and body; a longer one gets 400
+_CLIENT_MS = 10000  # an answer that takes longer is cut
 _SESSIONS = 4  # logins remembered; a new one forgets the oldest
 _BODY = 1024  # bytes: a larger request body gets 413
 _DEAD_MS = 1000  # the armed page silent this long: hold (the dead-man)
@@ -55,6 +59,8 @@ _TICK_MS = 10  # the panel's loop: poll the bus, step the stream and the player
 _FOLDER = "sequences"
 _NAME_MAX = 24
 _MS_DEFAULT = 1000  # time to reach an added pose, if the page gives none
+_HALT_MS = 100  # a sequence stopped mid-pose: the joints go where they are, in this
+_METHODS = ["GET", "POST", "PUT", "DELETE", "PATCH", "HEAD", "OPTIONS"]
 _NAME_CHARS = "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_"
 
 try:
@@ -100,6 +106,7 @@ _REASONS = {
     404: "Not Found",
     409: "Conflict",
     413: "Payload Too Large",
+    500: "Internal Server Error",
     504: "Gateway Timeout",
 }
 
@@ -138,41 +145,109 @@ def _name(body):
     return _FOLDER + "/" + name + ".json"
 
 
+class _Reader:
+    # A connection's reader, for Microdot: it gives a request at most _REQUEST
+    # bytes (MicroPython's readline() has no limit of its own, and a negative
+    # Content-Length would read until the RAM is full), then ValueError: a 400.
+    def __init__(self, reader):
+        self._reader = reader
+        self._buf = b""
+        self._left = _REQUEST
+
+    async def _more(self):
+        data = await self._reader.read(256)
+        self._left -= len(data)
+        if self._left < 0:
+            raise ValueError("the request is over %d bytes" % _REQUEST)
+        self._buf += data
+        return data
+
+    async def readline(self):
+        while b"\n" not in self._buf:
+            if not await self._more():
+                break
+        line, nl, self._buf = self._buf.partition(b"\n")
+        return line + nl
+
+    async def readexactly(self, n):
+        if not 0 <= n <= _BODY:
+            raise ValueError("Content-Length %d" % n)
+        while len(self._buf) < n:
+            if not await self._more():
+                raise EOFError
+        data, self._buf = self._buf[:n], self._buf[n:]
+        return data
+
+    async def read(self, n=-1):
+        # A body too large to keep, read to be dropped (413): not counted.
+        if self._buf:
+            data, self._buf = self._buf, b""
+            return data
+        return await self._reader.read(n)
+
+
 class _App(Microdot):
-    # Microdot, with a limit on the connections served at once and on their time:
-    # a board has few sockets and little RAM, and a client that never finishes
-    # its request must not hold one for ever.
-    def __init__(self):
+    # Microdot, with limits on its connections: a board has few sockets and
+    # little RAM, and the STOP button must get through whatever else comes.
+    # - A request must be in within _HEAD_MS; when _CLIENTS connections are still
+    #   sending theirs, a new one pushes out the oldest. So idle connections hold
+    #   nothing for long, and a page's request (sent at once) gets in.
+    # - At most _CLIENTS requests are answered at once, each within _CLIENT_MS;
+    #   more get 503, except a logged-in page's (sessions are few).
+    def __init__(self, logged_in):
         super().__init__()
-        self.clients = 0
+        self.options_handler = None  # OPTIONS too needs the password (a route below)
+        self._logged_in = logged_in  # request -> True if it comes with a session
+        self._reading = []  # the tasks still reading their request, oldest first
+        self.clients = 0  # requests being answered
 
     async def handle_request(self, reader, writer):
-        if self.clients >= _CLIENTS:
-            try:
-                # Its request read first, so that closing does not reset the connection
-                # (which could lose the answer on its way).
-                await asyncio.wait_for_ms(reader.read(_BODY), 100)
-            except (asyncio.TimeoutError, OSError):
-                pass
-            try:
-                await writer.awrite(
-                    b"HTTP/1.0 503 Service Unavailable\r\nContent-Type: application/json\r\n"
-                    b'Connection: close\r\n\r\n{"error": "too many clients"}'
-                )
-                await writer.aclose()
-            except OSError:
-                pass
+        task = asyncio.current_task()
+        reading = self._reading
+        if len(reading) >= _CLIENTS:
+            reading.pop(0).cancel()
+        reading.append(task)
+        request = None
+        try:
+            request = await asyncio.wait_for_ms(
+                Request.create(self, _Reader(reader), writer, writer.get_extra_info("peername")),
+                _HEAD_MS,
+            )
+        except (asyncio.TimeoutError, asyncio.CancelledError, OSError):
+            await _close(writer)  # too slow, pushed out, or gone
+            return
+        except Exception:  # malformed or too long: Microdot answers None with 400
+            pass
+        finally:
+            if task in reading:
+                reading.remove(task)
+        if self.clients >= _CLIENTS and not self._logged_in(request):
+            await _answer(_error(503, "too many clients"), writer)
             return
         self.clients += 1
         try:
-            await asyncio.wait_for_ms(super().handle_request(reader, writer), _CLIENT_MS)
+            response = await asyncio.wait_for_ms(self.dispatch_request(request), _CLIENT_MS)
+            await asyncio.wait_for_ms(_answer(response, writer), _CLIENT_MS)
         except asyncio.TimeoutError:
-            try:
-                await writer.aclose()
-            except OSError:
-                pass
+            await _close(writer)
         finally:
             self.clients -= 1
+
+
+async def _answer(response, writer):
+    try:
+        if response != Response.already_handled:
+            await response.write(writer)
+    except OSError:
+        pass  # the client has gone
+    await _close(writer)
+
+
+async def _close(writer):
+    try:
+        await writer.aclose()
+    except OSError:
+        pass
 
 
 class Panel:
@@ -209,7 +284,7 @@ class Panel:
                 self.disarm()
         return token
 
-    def _session(self, request):
+    def _session(self, request, note=True):
         # The session of the request's token (and note it was seen), or None.
         given = request.headers.get("Authorization", "")
         if not given.startswith("Bearer "):
@@ -219,7 +294,7 @@ class Panel:
         for session in self._sessions:  # all compared: the time says nothing
             if _same(given, session[0].encode()):
                 found = session
-        if found:
+        if found and note:
             found[1] = self._seen = time.ticks_ms()
         return found
 
@@ -229,12 +304,21 @@ class Panel:
         """Stop driving: the stream ends (the joints hold) and the sequence stops."""
         self.armed = None
         self.robot.hold()
-        if self.player:
-            self.player.stop()
-            self.player = None
+        self.stop()
+
+    def stop(self, halt=True):
+        """Stop the sequence; with halt, its pose on the way too (which would go
+        on for its ms): every joint is sent where it is now (a read, ~30 ms)."""
+        player = self.player
+        self.player = None
+        if player and not player.done:
+            player.stop()
+            if halt:
+                self.robot.move(self.robot.where(), ms=_HALT_MS)
 
     def estop(self):
-        self.disarm()
+        self.armed = None
+        self.stop(halt=False)  # at once: the joints go limp
         self.limp = True
         self.robot.estop()
 
@@ -264,7 +348,8 @@ class Panel:
         self.player = self.sequence.play(self.robot, speed, loop)
         self.limp = False
 
-    def state(self):
+    def state(self, token=None):
+        """What the page shows; "mine": the page of token has the panel armed."""
         robot = self.robot
         positions = self.bus.positions
         at = []
@@ -277,6 +362,7 @@ class Panel:
             "at": at,
             "battery": self.bus.battery,
             "armed": self.armed is not None,
+            "mine": token is not None and self.armed == token,
             "limp": self.limp,
             "steps": [ms for _, ms in self.sequence.steps],
             "playing": player.index if player else None,
@@ -293,9 +379,10 @@ class Panel:
                 self._tick()
             except Exception as e:  # the panel must go on, and say so
                 self.error = "%s: %s" % (type(e).__name__, e)
-                if self.player:
-                    self.player.stop()
-                    self.player = None
+                try:
+                    self.stop()
+                except Exception:
+                    self.stop(halt=False)  # the bus failed: stop sending, at least
             await asyncio.sleep_ms(_TICK_MS)
 
     def _tick(self):
@@ -326,7 +413,7 @@ class Panel:
     # The web server's routes.
 
     def _routes(self):
-        app = _App()
+        app = _App(lambda request: request and self._session(request, note=False))
         panel = self
         robot = self.robot
 
@@ -406,7 +493,7 @@ class Panel:
         @app.get("/api/state")
         @_guard
         async def state(request):
-            return panel.state()
+            return panel.state(request.g.token)
 
         @app.post("/api/arm")
         @_guard
@@ -420,7 +507,7 @@ class Panel:
                 panel.armed = request.g.token
             elif panel.armed == request.g.token:
                 panel.disarm()
-            return panel.state()
+            return panel.state(request.g.token)
 
         @app.post("/api/target")
         @_guard
@@ -432,7 +519,7 @@ class Panel:
         @_guard
         async def estop(request):
             panel.estop()
-            return panel.state()
+            return panel.state(request.g.token)
 
         @app.post("/api/limp")
         @_guard
@@ -440,7 +527,7 @@ class Panel:
             panel.disarm()
             robot.limp()
             panel.limp = True
-            return panel.state()
+            return panel.state(request.g.token)
 
         @app.post("/api/capture")
         @_guard
@@ -453,7 +540,7 @@ class Panel:
             body = request.g.body
             ms = _MS_DEFAULT if body.get("ms") is None else _need(body, "ms", int, 0, 65535)
             panel.sequence.append(robot.capture(), ms)
-            return panel.state()
+            return panel.state(request.g.token)
 
         @app.post("/api/remove")
         @_guard
@@ -463,7 +550,7 @@ class Panel:
             if not steps or panel.player:
                 raise _Refused(409, "nothing to remove, or a sequence is playing")
             steps.pop(i)
-            return panel.state()
+            return panel.state(request.g.token)
 
         @app.post("/api/clear")
         @_guard
@@ -471,7 +558,7 @@ class Panel:
             if panel.player:
                 raise _Refused(409, "a sequence is playing: stop it first")
             panel.sequence = bm.Sequence()
-            return panel.state()
+            return panel.state(request.g.token)
 
         @app.post("/api/play")
         @_guard
@@ -480,15 +567,13 @@ class Panel:
             speed = 1.0 if body.get("speed") is None else _need(body, "speed", float, 0.1, 10)
             loop = bool(body.get("loop"))
             panel._play(request.g.token, speed, loop)
-            return panel.state()
+            return panel.state(request.g.token)
 
         @app.post("/api/stop")
         @_guard
         async def stop(request):
-            if panel.player:
-                panel.player.stop()
-                panel.player = None
-            return panel.state()
+            panel.stop()
+            return panel.state(request.g.token)
 
         @app.get("/api/sequences")
         @_guard
@@ -509,7 +594,10 @@ class Panel:
                 os.mkdir(_FOLDER)
             except OSError:
                 pass  # it is there
-            panel.sequence.save(path)
+            try:
+                panel.sequence.save(path)
+            except OSError as e:  # the board's filesystem, not the controller
+                raise _Refused(500, "could not save %s: %r" % (path, e))
             return {}
 
         @app.post("/api/load")
@@ -531,10 +619,12 @@ class Panel:
                             400, "%s moves joint %r, which this robot has not" % (path, name)
                         )
             panel.sequence = sequence
-            return panel.state()
+            return panel.state(request.g.token)
 
         # Anything else: 401 without a session (before_request), else 404.
-        @app.route("/<path:path>", methods=["GET", "POST", "PUT", "DELETE", "PATCH", "HEAD"])
+        @app.route(
+            "/<path:path>", methods=["GET", "POST", "PUT", "DELETE", "PATCH", "HEAD", "OPTIONS"]
+        )
         @_guard
         async def other(request, path):
             return refuse(404, "no such page")

@@ -9,7 +9,8 @@ busservo_web.html.gz beside it (the README's mip command brings them all).
 The page: a slider per joint, live positions (about 5 a second), the battery, limp, capture,
 a sequence to add poses to, play (loop, speed), save and load, and a STOP button (Esc) that
 lets every joint go limp. Nothing moves until the page is armed; when the armed page goes
-silent for a second (tab closed, Wi-Fi gone), the stream stops and the joints hold.
+silent for a second (tab closed, Wi-Fi gone), the stream stops and the joints hold, and a
+sequence stops where the joints are.
 Without the password only the page is served; every other request gets 401.
 """
 
@@ -40,11 +41,15 @@ class Panel:
     app: Any
     def __init__(self, robot: Robot, password: str) -> None: ...
     def disarm(self) -> None:
-        """Stop driving: the stream ends (the joints hold) and the sequence stops."""
+        """Stop driving: the stream ends (the joints hold) and the sequence stops, halted."""
+    def stop(self, halt: bool = True) -> None:
+        """Stop the sequence; with halt, its pose on the way too: every joint is sent where
+        it is now (a blocking read of the positions, about 30 ms)."""
     def estop(self) -> None:
-        """disarm(), then Robot.estop(): every joint limp."""
-    def state(self) -> dict[str, Any]:
-        """What GET /api/state answers: positions in degrees, battery, armed, the sequence."""
+        """Disarm and stop the sequence at once, then Robot.estop(): every joint limp."""
+    def state(self, token: str | None = None) -> dict[str, Any]:
+        """What GET /api/state answers: positions in degrees, battery, armed (and "mine":
+        armed by token's page), the sequence."""
     async def run(self) -> None:
         """The panel's loop, for ever: the bus's replies, the stream, the player, the
         dead-man, and position and battery requests."""

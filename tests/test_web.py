@@ -148,6 +148,9 @@ class Security(Tidy):
             ):
                 status, reply = await http(port, "GET", path)
                 self.assertEqual(status, 401, path)
+            for _, path, _ in ROUTES:  # OPTIONS says nothing of them either
+                status, reply = await http(port, "OPTIONS", path)
+                self.assertEqual(status, 401, (path, reply))
             await asyncio.sleep_ms(100)
             self.assertEqual(len(moves(world)), before)
             self.assertEqual(robot.updates, 0)
@@ -299,18 +302,67 @@ class BadInput(Tidy):
 
         run(scenario)
 
-    def test_too_many_clients_get_503_and_the_server_goes_on(self):
+    def test_idle_connections_hold_nothing_and_a_logged_in_page_always_gets_through(self):
         async def scenario(port, world, robot):
             token = await login(port)
             idle = []
-            for _ in range(4):  # clients that connect and say nothing
+            for _ in range(12):  # clients that connect and say nothing
                 idle.append(await asyncio.open_connection("127.0.0.1", port))
-            await asyncio.sleep_ms(50)
-            status, reply = await http(port, "GET", "/api/state", token=token)
-            self.assertEqual((status, reply), (503, {"error": "too many clients"}))
+                await asyncio.sleep_ms(5)
+            status, reply = await http(port, "POST", "/api/estop", {}, token)
+            self.assertEqual(status, 200, reply)  # STOP gets through
+            status, _ = await http(port, "POST", "/api/login", {"password": PASSWORD})
+            self.assertEqual(status, 200)  # and so does anyone else
+            # The oldest idle connections were pushed out, and the last are closed
+            # within about a second of saying nothing.
+            start = time.ticks_ms()
+            reader, writer = idle[-1]
+            self.assertEqual(await asyncio.wait_for_ms(reader.read(100), 2000), b"")
+            self.assertTrue(time.ticks_diff(time.ticks_ms(), start) < 1200)
             for _, writer in idle:
                 await writer.aclose()
-            await asyncio.sleep_ms(50)
+
+        run(scenario)
+
+    def test_too_many_answers_at_once_get_503_but_not_a_logged_in_pages(self):
+        async def scenario(port, world, robot):
+            token = await login(port)
+            # Wrong passwords: each answer takes half a second, and takes a place.
+            wrong = [
+                asyncio.create_task(http(port, "POST", "/api/login", {"password": "x" * 9}))
+                for _ in range(4)
+            ]
+            await asyncio.sleep_ms(100)
+            status, reply = await http(port, "POST", "/api/login", {"password": PASSWORD})
+            self.assertEqual((status, reply), (503, {"error": "too many clients"}))
+            status, reply = await http(port, "POST", "/api/estop", {}, token)
+            self.assertEqual(status, 200, reply)
+            for task in wrong:
+                self.assertEqual((await task)[0], 401)
+            status, _ = await http(port, "GET", "/api/state", token=token)
+            self.assertEqual(status, 200)
+
+        run(scenario)
+
+    def test_a_request_too_long_or_of_a_negative_length_gets_400_and_the_server_goes_on(self):
+        async def scenario(port, world, robot):
+            token = await login(port)
+            for raw in (
+                b"POST /api/login HTTP/1.0\r\nContent-Length: -1\r\n\r\n" + b"{" * 20000,
+                b"GET / HTTP/1.0\r\n" + (b"X-Header: " + b"a" * 90 + b"\r\n") * 100 + b"\r\n",
+                b"GET / HTTP/1.0\r\nX: " + b"a" * 20000,  # a line with no end
+            ):
+                reader, writer = await asyncio.open_connection("127.0.0.1", port)
+                try:
+                    await writer.awrite(raw)
+                except OSError:
+                    pass  # the server closed before taking it all
+                try:
+                    reply = await asyncio.wait_for_ms(reader.read(200), 2000)
+                except OSError:
+                    reply = b"reset"
+                await writer.aclose()
+                self.assertEqual(reply[:12], b"HTTP/1.0 400", raw[:40])
             status, _ = await http(port, "GET", "/api/state", token=token)
             self.assertEqual(status, 200)
 
@@ -389,6 +441,47 @@ class Driving(Tidy):
             )
             self.assertEqual(status, 409)  # and stays so until armed again
 
+        run(scenario)
+
+    def test_stop_disarm_or_silence_mid_pose_halt_the_joints_where_they_are(self):
+        async def alive(token, ms):  # the page, polling as it does
+            for _ in range(ms // 200):
+                await http(port_[0], "GET", "/api/state", token=token)
+                await asyncio.sleep_ms(200)
+
+        async def scenario(port, world, robot):
+            port_.append(port)
+            for how in ("stop", "disarm", "silence"):
+                token = await armed(port)
+                await http(port, "POST", "/api/clear", {}, token)
+                for degrees, ms in ((-40, 300), (40, 20000)):  # the second pose: 20 s
+                    await http(port, "POST", "/api/target", {"targets": {"base": degrees}}, token)
+                    for _ in range(20):
+                        if at(world, robot, "base", degrees):
+                            break
+                        await alive(token, 200)
+                    await http(port, "POST", "/api/add", {"ms": ms}, token)
+                status, reply = await http(port, "POST", "/api/play", {}, token)
+                self.assertEqual(status, 200, reply)
+                await alive(token, 1000)  # on its way to 40 degrees, slowly
+                if how == "stop":
+                    status, reply = await http(port, "POST", "/api/stop", {}, token)
+                elif how == "disarm":
+                    status, reply = await http(port, "POST", "/api/arm", {"on": False}, token)
+                else:
+                    self.assertTrue(await until(lambda: not busservo_web_armed(robot), 1500))
+                    status, reply = 200, {"playing": None}
+                self.assertEqual((status, reply["playing"]), (200, None), (how, reply))
+                await asyncio.sleep_ms(300)
+                halted = world.sim.position(1)
+                await asyncio.sleep_ms(1000)
+                self.assertEqual(world.sim.position(1), halted, how)  # not still moving
+                self.assertTrue(
+                    robot.joints["base"].position(-38) < halted < robot.joints["base"].position(0),
+                    (how, halted),
+                )
+
+        port_ = []
         run(scenario)
 
     def test_stop_mid_sequence_lets_every_joint_go_limp(self):
