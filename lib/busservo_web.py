@@ -12,7 +12,8 @@
 # Safety. Nothing moves until a page is armed (its switch), and only the page
 # that armed can drive. Disarming, closing that page or losing its connection
 # ends the stream: when it has been silent for _DEAD_MS, the stream stops and
-# the joints hold where they are (Robot.hold()), and a sequence stops playing.
+# the joints hold where they are (Robot.hold()), and a sequence stops playing,
+# its pose on the way too (the joints it moves are sent where they are).
 # The stop button (Robot.estop(): every joint limp) works from any logged-in
 # page, armed or not, mid-drag and mid-sequence.
 #
@@ -21,9 +22,9 @@
 # compared in constant time; a login gives the page a random token that it sends
 # with each request (Authorization: Bearer). Bad input gets a 4xx naming what was
 # wrong and moves nothing. A connection has _HEAD_MS to send its request, of at
-# most _REQUEST bytes (a body of at most _BODY, else 413); at most _CLIENTS are
-# answered at once (more get 503), but a logged-in page always is: its STOP gets
-# through, whatever else the network sends.
+# most _REQUEST bytes (a body of at most _BODY, else 413); connections that say
+# nothing are pushed out by new ones; at most _CLIENTS are answered at once (more
+# get 503), but a logged-in page is (up to twice as many): its STOP gets through.
 # Sequences are saved under sequences/ by a name of letters, digits, - and _.
 # Plain HTTP: anyone who can watch the Wi-Fi can read the password. Use a
 # network you trust, or the board's own access point with a WPA2 key.
@@ -107,6 +108,7 @@ _REASONS = {
     409: "Conflict",
     413: "Payload Too Large",
     500: "Internal Server Error",
+    503: "Service Unavailable",
     504: "Gateway Timeout",
 }
 
@@ -153,9 +155,11 @@ class _Reader:
         self._reader = reader
         self._buf = b""
         self._left = _REQUEST
+        self.heard = False  # a byte has come
 
     async def _more(self):
         data = await self._reader.read(256)
+        self.heard = self.heard or bool(data)
         self._left -= len(data)
         if self._left < 0:
             raise ValueError("the request is over %d bytes" % _REQUEST)
@@ -189,28 +193,36 @@ class _Reader:
 class _App(Microdot):
     # Microdot, with limits on its connections: a board has few sockets and
     # little RAM, and the STOP button must get through whatever else comes.
-    # - A request must be in within _HEAD_MS; when _CLIENTS connections are still
-    #   sending theirs, a new one pushes out the oldest. So idle connections hold
-    #   nothing for long, and a page's request (sent at once) gets in.
+    # - A request must be in within _HEAD_MS. When _CLIENTS connections are still
+    #   reading theirs, a new one pushes out the oldest that has sent nothing yet
+    #   (if they all have, the new one is closed). So connections that say nothing
+    #   hold nothing, and a page's request, sent at once, gets in.
     # - At most _CLIENTS requests are answered at once, each within _CLIENT_MS;
-    #   more get 503, except a logged-in page's (sessions are few).
+    #   more get 503, except a logged-in page's (up to twice as many).
     def __init__(self, logged_in):
         super().__init__()
         self.options_handler = None  # OPTIONS too needs the password (a route below)
         self._logged_in = logged_in  # request -> True if it comes with a session
-        self._reading = []  # the tasks still reading their request, oldest first
+        self._reading = []  # (task, _Reader) of the requests being read, oldest first
         self.clients = 0  # requests being answered
 
     async def handle_request(self, reader, writer):
-        task = asyncio.current_task()
         reading = self._reading
         if len(reading) >= _CLIENTS:
-            reading.pop(0).cancel()
-        reading.append(task)
+            for i, (task, other) in enumerate(reading):
+                if not other.heard:
+                    reading.pop(i)
+                    task.cancel()
+                    break
+            else:
+                await _close(writer)
+                return
+        mine = (asyncio.current_task(), _Reader(reader))
+        reading.append(mine)
         request = None
         try:
             request = await asyncio.wait_for_ms(
-                Request.create(self, _Reader(reader), writer, writer.get_extra_info("peername")),
+                Request.create(self, mine[1], writer, writer.get_extra_info("peername")),
                 _HEAD_MS,
             )
         except (asyncio.TimeoutError, asyncio.CancelledError, OSError):
@@ -219,9 +231,11 @@ class _App(Microdot):
         except Exception:  # malformed or too long: Microdot answers None with 400
             pass
         finally:
-            if task in reading:
-                reading.remove(task)
-        if self.clients >= _CLIENTS and not self._logged_in(request):
+            if mine in reading:
+                reading.remove(mine)
+        if self.clients >= _CLIENTS and (
+            self.clients >= 2 * _CLIENTS or not self._logged_in(request)
+        ):
             await _answer(_error(503, "too many clients"), writer)
             return
         self.clients += 1
@@ -300,25 +314,28 @@ class Panel:
 
     # What the page can do.
 
-    def disarm(self):
+    def disarm(self, halt=True):
         """Stop driving: the stream ends (the joints hold) and the sequence stops."""
         self.armed = None
         self.robot.hold()
-        self.stop()
+        self.stop(halt)
 
     def stop(self, halt=True):
         """Stop the sequence; with halt, its pose on the way too (which would go
-        on for its ms): every joint is sent where it is now (a read, ~30 ms)."""
+        on for its ms): the joints it moves are sent where they are now (a read
+        of their positions first, ~30 ms)."""
         player = self.player
         self.player = None
         if player and not player.done:
             player.stop()
             if halt:
-                self.robot.move(self.robot.where(), ms=_HALT_MS)
+                names = set()
+                for pose, _ in self.sequence.steps:
+                    names.update(pose)
+                self.robot.move(self.robot.where(list(names)), ms=_HALT_MS)
 
     def estop(self):
-        self.armed = None
-        self.stop(halt=False)  # at once: the joints go limp
+        self.disarm(halt=False)  # at once: the joints go limp
         self.limp = True
         self.robot.estop()
 
@@ -524,7 +541,7 @@ class Panel:
         @app.post("/api/limp")
         @_guard
         async def limp(request):
-            panel.disarm()
+            panel.disarm(halt=False)  # limp stops every joint, even with no controller
             robot.limp()
             panel.limp = True
             return panel.state(request.g.token)
@@ -646,7 +663,7 @@ async def serve(robot, password, port=80):
         await panel.app.start_server(host="0.0.0.0", port=port)
     finally:
         loop.cancel()
-        panel.disarm()
         server = getattr(panel.app, "server", None)
         if server:
             server.close()
+        panel.disarm()

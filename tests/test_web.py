@@ -324,6 +324,29 @@ class BadInput(Tidy):
 
         run(scenario)
 
+    def test_a_request_on_its_way_is_not_pushed_out_by_connections_that_say_nothing(self):
+        async def scenario(port, world, robot):
+            token = await login(port)
+            reader, writer = await asyncio.open_connection("127.0.0.1", port)
+            await writer.awrite(b"POST /api/estop HTTP/1.0\r\n")  # its first line only
+            await asyncio.sleep_ms(50)
+            idle = []
+            for _ in range(8):
+                idle.append(await asyncio.open_connection("127.0.0.1", port))
+                await asyncio.sleep_ms(5)
+            body = b"{}"
+            await writer.awrite(
+                b"Authorization: Bearer %s\r\nContent-Length: %d\r\n\r\n%s"
+                % (token.encode(), len(body), body)
+            )
+            reply = await asyncio.wait_for_ms(reader.read(100), 2000)
+            await writer.aclose()
+            self.assertEqual(reply[:12], b"HTTP/1.0 200", reply)
+            for _, w in idle:
+                await w.aclose()
+
+        run(scenario)
+
     def test_too_many_answers_at_once_get_503_but_not_a_logged_in_pages(self):
         async def scenario(port, world, robot):
             token = await login(port)
@@ -482,6 +505,48 @@ class Driving(Tidy):
                 )
 
         port_ = []
+        run(scenario)
+
+    def test_a_stop_halts_only_the_joints_the_sequence_moves(self):
+        async def scenario(port, world, robot):
+            token = await armed(port)
+            await http(port, "POST", "/api/limp", {}, token)  # all four let go
+            os.mkdir("sequences")
+            bm.Sequence([({"base": -40}, 300), ({"base": 40}, 20000)]).save(
+                "sequences/base_only.json"
+            )
+            status, reply = await http(port, "POST", "/api/load", {"name": "base_only"}, token)
+            self.assertEqual(status, 200, reply)
+            await http(port, "POST", "/api/arm", {"on": True}, token)
+            await http(port, "POST", "/api/play", {}, token)
+            await asyncio.sleep_ms(800)  # on its way to 40 degrees
+            status, reply = await http(port, "POST", "/api/stop", {}, token)
+            self.assertEqual(status, 200, reply)
+            await asyncio.sleep_ms(100)  # the halt's frame, across the wire
+            halt = moves(world)[-1]
+            self.assertEqual((halt[3], halt[5] | halt[6] << 8, halt[7]), (CMD_SERVO_MOVE, 100, 1))
+            self.assertEqual(world.sim.limp, {2, 3, 4})  # still limp: not stiffened
+
+        try:
+            run(scenario)
+        finally:
+            try:
+                os.remove("sequences/base_only.json")
+                os.rmdir("sequences")
+            except OSError:
+                pass
+
+    def test_limp_mid_sequence_works_with_a_controller_that_does_not_answer(self):
+        async def scenario(port, world, robot):
+            token = await armed(port)
+            await http(port, "POST", "/api/add", {"ms": 20000}, token)
+            await http(port, "POST", "/api/play", {}, token)
+            await asyncio.sleep_ms(200)
+            world.sim.silent = True  # it still obeys, but answers no query
+            status, reply = await http(port, "POST", "/api/limp", {}, token)
+            self.assertEqual((status, reply["limp"], reply["playing"]), (200, True, None), reply)
+            self.assertTrue(await until(lambda: world.sim.limp == {1, 2, 3, 4}, 200))
+
         run(scenario)
 
     def test_stop_mid_sequence_lets_every_joint_go_limp(self):
