@@ -40,11 +40,12 @@ class Panel:
     """The joints were let go (limp or stop) and not moved since."""
     app: Any
     def __init__(self, robot: Robot, password: str) -> None: ...
-    def disarm(self) -> None:
-        """Stop driving: the stream ends (the joints hold) and the sequence stops, halted."""
+    def disarm(self, halt: bool = True) -> None:
+        """Stop driving: the stream ends (the joints hold) and the sequence stops (see
+        stop(): with halt, its pose on the way too)."""
     def stop(self, halt: bool = True) -> None:
-        """Stop the sequence; with halt, its pose on the way too: every joint is sent where
-        it is now (a blocking read of the positions, about 30 ms)."""
+        """Stop the sequence; with halt, its pose on the way too: the joints it moves are
+        sent where they are now (a blocking read of their positions first, about 30 ms)."""
     def estop(self) -> None:
         """Disarm and stop the sequence at once, then Robot.estop(): every joint limp."""
     def state(self, token: str | None = None) -> dict[str, Any]:
