@@ -9,12 +9,14 @@
 # access point, "busservo", whose WPA2 key is the panel's password. The board prints the
 # address to open and the password. Install the panel first (README: the web panel).
 #   mpremote run examples/web_panel.py
-# On the unix port, against the simulated controller, at http://127.0.0.1:8080:
+# On the unix port, against the simulated controller, at http://127.0.0.1:8080 (and on your
+# PC's other addresses: it listens on every interface, as a board does):
 #   sh boards/unix.sh examples/web_panel.py [--port N] [--password P]
 #
 # The password: the one given, else the one in web_panel.txt, else a new random one, kept
 # in web_panel.txt (on the board's filesystem, or in the folder this runs from).
 import asyncio
+import errno
 import os
 import sys
 
@@ -50,9 +52,14 @@ PASSWORD_FILE = "web_panel.txt"
 
 
 def option(name, default):
-    """--name VALUE from the command line (the unix port), else default."""
+    """--name VALUE or --name=VALUE from the command line (the unix port), else default."""
     args = sys.argv
-    return args[args.index(name) + 1] if name in args[:-1] else default
+    for i, arg in enumerate(args):
+        if arg == name and i + 1 < len(args):
+            return args[i + 1]
+        if arg.startswith(name + "="):
+            return arg[len(name) + 1 :]
+    return default
 
 
 def password():
@@ -96,15 +103,30 @@ def connect(key):
             raise OSError("could not join %r: check WIFI in board.py" % wifi[0])
         return station.ifconfig()[0]
     ap = network.WLAN(network.AP_IF)
-    ap.config(ssid="busservo", key=key)  # WPA2 with the panel's password
+    # WPA2 with the panel's password, said outright: on an ESP32 a key alone leaves the
+    # access point open (its default); a Pico W's is WPA2 already.
+    wpa2 = getattr(network.WLAN, "SEC_WPA2", None)
+    if wpa2 is None:
+        ap.config(ssid="busservo", key=key)
+    else:
+        ap.config(ssid="busservo", key=key, security=wpa2)
     ap.active(True)
     print("started the access point busservo; its key is the password below")
     return ap.ifconfig()[0]
 
 
 def main():
-    port = int(option("--port", 8080 if UNIX else 80))
+    try:
+        port = int(option("--port", 8080 if UNIX else 80))
+    except ValueError:
+        port = -1
+    if not 0 < port < 65536:
+        print("--port wants a number from 1 to 65535, got %r" % option("--port", None))
+        raise SystemExit(2)
     key = password()
+    if len(key) < 8:
+        print("--password wants 8 or more characters, got %d" % len(key))
+        raise SystemExit(2)
     serial = uart()
     print("talking to", serial)
     bus = busservo.BusServo(serial)
@@ -124,15 +146,38 @@ def main():
         },
     )
     robot.where()  # where the joints start (a joint with a dps limit needs it)
-    print(
-        "open http://%s%s/ and log in with the password %s"
-        % (address, "" if port == 80 else ":%d" % port, key)
-    )
-    print("(Ctrl-C stops the panel)")
     try:
-        asyncio.run(busservo_web.serve(robot, key, port))
+        asyncio.run(serve(robot, key, port, address))
+    except OSError as e:
+        if e.errno != errno.EADDRINUSE:
+            raise
+        print("port %d is in use (another panel?): give another with --port N" % port)
+        raise SystemExit(1)
     finally:
         robot.hold()
+
+
+async def serve(robot, key, port, address):
+    """busservo_web.serve(), saying where to go once it is listening."""
+    failed = []
+
+    async def run():
+        try:
+            await busservo_web.serve(robot, key, port)
+        except OSError as e:  # the port in use, most likely: main() says so
+            failed.append(e)
+
+    server = asyncio.create_task(run())
+    await asyncio.sleep_ms(200)
+    if not failed:
+        print(
+            "open http://%s%s/ and log in with the password %s"
+            % (address, "" if port == 80 else ":%d" % port, key)
+        )
+        print("(Ctrl-C stops the panel)")
+    await server
+    if failed:
+        raise failed[0]
 
 
 main()

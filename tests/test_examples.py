@@ -262,3 +262,48 @@ class Examples(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+class WebPanel(unittest.TestCase):
+    # examples/web_panel.py's command line on the unix port (the panel itself: test_web).
+    def run_panel(self, args, seconds=3):
+        folder = scratch("web_panel")
+        os.mkdir(folder)
+        try:
+            return sh(
+                "cd %s && timeout -s INT %d sh %s/boards/unix.sh %s/examples/web_panel.py %s"
+                % (folder, seconds, os.getcwd(), os.getcwd(), args)
+            )
+        finally:
+            sh("rm -rf " + folder)
+
+    def test_a_short_password_or_a_bad_port_is_refused_before_anything_starts(self):
+        for args, said in (
+            ("--password short", "--password wants 8 or more characters, got 5"),
+            ("--port=abc", "--port wants a number from 1 to 65535, got 'abc'"),
+            ("--port 0", "--port wants a number from 1 to 65535, got '0'"),
+        ):
+            ok, out = self.run_panel(args)
+            self.assertFalse(ok, args)
+            self.assertEqual(out.strip().split("\n")[-1], said, out)
+            self.assertFalse("Traceback" in out, out)
+
+    def test_port_given_as_port_equals_n_is_taken(self):
+        ok, out = self.run_panel("--port=18098 --password test-pw-2")
+        self.assertIn("open http://127.0.0.1:18098/ and log in with the password test-pw-2", out)
+
+    def test_a_port_in_use_is_said_plainly_and_the_address_is_not_printed(self):
+        sh(
+            "timeout -s INT 4 sh boards/unix.sh examples/web_panel.py --port 18097 "
+            "--password test-pw-3 >/dev/null 2>&1 &"
+        )
+        sh("sleep 1.5")
+        ok, out = self.run_panel("--port 18097 --password test-pw-3")
+        self.assertFalse(ok)
+        self.assertEqual(
+            out.strip().split("\n")[-1],
+            "port 18097 is in use (another panel?): give another with --port N",
+            out,
+        )
+        self.assertFalse("open http" in out or "Traceback" in out, out)
+        sh("sleep 3")
