@@ -64,11 +64,24 @@ _HALT_MS = 100  # a sequence stopped mid-pose: the joints go where they are, in 
 _METHODS = ["GET", "POST", "PUT", "DELETE", "PATCH", "HEAD", "OPTIONS"]
 _NAME_CHARS = "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_"
 
-try:
-    _PAGE = __file__.rpartition("/")[0] or "."
-except NameError:  # frozen into the firmware: look in /lib
-    _PAGE = "/lib"
-_PAGE += "/busservo_web.html.gz"
+
+def _find_page():
+    # The page: beside this module (installed by mip or mpremote, or on the unix port),
+    # else in /lib (a module frozen into the firmware has no folder on the filesystem).
+    try:
+        here = __file__.rpartition("/")[0] or "."
+    except NameError:
+        here = "/lib"
+    for folder in (here, "/lib"):
+        try:
+            os.stat(folder + "/busservo_web.html.gz")
+            return folder + "/busservo_web.html.gz"
+        except OSError:
+            pass
+    return here + "/busservo_web.html.gz"  # not there: serve() says so
+
+
+_PAGE = _find_page()
 
 
 def _same(given, secret):
