@@ -32,31 +32,28 @@ if ! command -v socat >/dev/null 2>&1; then
         echo "tests/run.sh: could not install socat: the mpremote test will be skipped" >&2
 fi
 
-# The web panel's browser tests (tests/browser.py): Selenium (pinned) from PyPI drives Debian's
-# Chromium through its chromedriver; no browser is downloaded. Without them those tests skip,
-# saying so.
-SELENIUM=4.50.0
-have=$(.venv/bin/python -c 'import selenium; print(selenium.__version__)' 2>/dev/null)
-if [ "$have" != "$SELENIUM" ]; then
-    echo "tests/run.sh: installing selenium $SELENIUM into .venv/ (for the browser tests)" >&2
-    .venv/bin/pip install --disable-pip-version-check -q "selenium==$SELENIUM" \
-        >>.venv/setup.log 2>&1 ||
-        echo "tests/run.sh: could not install selenium: the browser tests will be skipped" >&2
-fi
+# pip_install PACKAGE MODULE VERSION WHAT-FOR WHAT-SKIPS: PACKAGE==VERSION from PyPI into
+# .venv/, unless MODULE is that version already; without it, WHAT-SKIPS skips, saying so.
+pip_install() {
+    have=$(.venv/bin/python -c "import $2; print($2.__version__)" 2>/dev/null)
+    [ "$have" = "$3" ] && return 0
+    echo "tests/run.sh: installing $1 $3 into .venv/ ($4)" >&2
+    .venv/bin/pip install --disable-pip-version-check -q "$1==$3" >>.venv/setup.log 2>&1 ||
+        echo "tests/run.sh: could not install $1: $5 will be skipped" >&2
+}
+
+# The web panel's browser tests (tests/browser.py): Selenium (pinned) drives Debian's Chromium
+# through its chromedriver; no browser is downloaded.
+pip_install selenium selenium 4.50.0 "for the browser tests" "the browser tests"
 if [ ! -x /usr/bin/chromium ] || [ ! -x /usr/bin/chromedriver ]; then
     apt_install "the browser for the web panel's tests (a few minutes)" chromium chromium-driver ||
         echo "tests/run.sh: could not install chromium: the browser tests will be skipped" >&2
 fi
 
 # resvg-py (a wheel with the resvg renderer compiled in: no system library) lets
-# tests/test_docs.py render the wiring pictures; without it that test skips, saying so.
-RESVG=0.5.0
-have=$(.venv/bin/python -c 'import resvg_py; print(resvg_py.__version__)' 2>/dev/null)
-if [ "$have" != "$RESVG" ]; then
-    echo "tests/run.sh: installing resvg-py $RESVG into .venv/ (to render the wiring pictures)" >&2
-    .venv/bin/pip install --disable-pip-version-check -q "resvg-py==$RESVG" >>.venv/setup.log 2>&1 ||
-        echo "tests/run.sh: could not install resvg-py: the pictures' rendering test will be skipped" >&2
-fi
+# tests/test_docs.py render the wiring pictures.
+pip_install resvg-py resvg_py 0.5.0 "to render the wiring pictures" \
+    "the pictures' rendering test"
 
 passed=0
 failed=0
