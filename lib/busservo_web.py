@@ -358,8 +358,7 @@ class Panel:
 
     def _target(self, token, targets):
         self._driver(token)
-        if self.player:
-            raise _Refused(409, "a sequence is playing: stop it first")
+        self._not_playing()
         if type(targets) is not dict or not targets:
             raise _Refused(400, "targets must be {joint: degrees}, got %r" % (targets,))
         for name in targets:
@@ -369,6 +368,10 @@ class Panel:
             _need(targets, name, float, joint.lo, joint.hi, "targets[%r]" % name)
         self.robot.stream(targets)
         self.limp = False
+
+    def _not_playing(self):
+        if self.player:
+            raise _Refused(409, "a sequence is playing: stop it first")
 
     def _play(self, token, speed, loop):
         self._driver(token)
@@ -585,8 +588,7 @@ class Panel:
         @app.post("/api/clear")
         @_guard
         async def clear(request):
-            if panel.player:
-                raise _Refused(409, "a sequence is playing: stop it first")
+            panel._not_playing()
             panel.sequence = bm.Sequence()
             return panel.state(request.g.token)
 
@@ -634,8 +636,7 @@ class Panel:
         @_guard
         async def load(request):
             path = _name(request.g.body)
-            if panel.player:
-                raise _Refused(409, "a sequence is playing: stop it first")
+            panel._not_playing()
             try:
                 sequence = bm.Sequence.load(path)
             except OSError:
