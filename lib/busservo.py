@@ -425,7 +425,7 @@ class BusServo:
                         cmd = rx[r + 3]
                         ok = _LENGTHS[cmd] if cmd < 22 else 0
                         if ok == 3:  # positions: Length 3n + 3, n >= 1 servos (Prm 1)
-                            ok = have < 5 or rx[r + 4] and length == 3 * rx[r + 4] + 3
+                            ok = length > 5 and (have < 5 or length == 3 * rx[r + 4] + 3)
                         else:
                             ok = ok and length == ok
                         if ok and have >= length + 2:

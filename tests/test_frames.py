@@ -208,6 +208,9 @@ class Resync(unittest.TestCase):
             b"\x55\x55\x05\x07",  # STOP must have Length 2
             b"\x55\x55\x40\x0f",  # battery must have Length 4
             b"\x55\x55\x09\x15\x06",  # 6 positions need Length 21
+            b"\x55\x55\x02\x15",  # positions need Length 6 or more (3n + 3, n >= 1) ...
+            b"\x55\x55\x03\x15",  # ... which 4 bytes read alone must already show
+            b"\x55\x55\x04\x15\x01",
             b"\x55\x55\x00",  # no frame has Length 0 or 1
             b"\x55\x55\x01",
         ):

@@ -105,6 +105,16 @@ class Wire(unittest.TestCase):
             w.noise(b"\x55\x55\xff\x63")
             self.assertEqual(bus.read_battery(), 7500, port)
 
+    def test_four_bytes_of_noise_are_no_position_reply(self):
+        # 55 55 02 15: a positions header with a Length no reply has (3n + 3, n >= 1). Read
+        # alone, it was once taken for a whole frame, decoded from the last reply's bytes.
+        for port, w, bus in ports():
+            self.assertEqual(bus.read_positions([1]), {1: 500}, port)
+            w.noise(b"\x55\x55\x02\x15")
+            w.sim.silent = True
+            self.assertTrue(timed_out(lambda b=bus: b.read_positions([1])), port)
+            self.assertEqual(bus.noise, 4, port)
+
     def test_a_frame_cut_short_holds_nothing_hostage(self):
         for port, w, bus in ports():
             w.cut_reply(4)  # the battery reply stops after 55 55 04 0F
