@@ -85,9 +85,9 @@ class BusServo:
         self._cut_at = 0  # bytes of it sent (0: nothing is cut)
         tx = self._tx = bytearray(_FRAME_MAX)
         tx[0] = tx[1] = _HEADER  # reading never uses tx: it stays
-        # move() is the call a control loop makes most: it has a frame of its
-        # own, with the header, Length, command and count already in place.
-        self._move = bytearray((_HEADER, _HEADER, 8, CMD_SERVO_MOVE, 1, 0, 0, 0, 0, 0))
+        # move() is the call a control loop makes most: it has a frame of its own,
+        # with the header, Length 8, CMD_SERVO_MOVE (3) and 1 servo already in place.
+        self._move = bytearray(b"\x55\x55\x08\x03\x01\0\0\0\0\0")
         # Reading: the UART's bytes go through _chunk into rx[_r:_w], where
         # frames are decoded. (readinto() cannot start mid-buffer without a
         # memoryview slice, which allocates.)
@@ -98,9 +98,10 @@ class BusServo:
         self._busy = False  # decoding: a callback that polls meanwhile gets None
         self._queue = bytearray(_QUEUE)  # commands of frames held back by queries
         self._queued = 0
-        # Requests in flight, of each kind [battery, positions]: how many
-        # replies may still come; and the ids of the positions asked last.
-        self._waiting = [0, 0]
+        # Replies that may still come, of each kind: [battery, positions] to the
+        # requests in flight, then [battery, positions] to those a query gave up
+        # on (see ask()); and the ids of the positions asked last.
+        self._waiting = [0, 0, 0, 0]
         self._asked = bytearray(85)  # count, ids
         self.noise = 0  # bytes read that were no frame of the controller's
         self.lost = 0  # frames not held because the queue was full
@@ -335,6 +336,7 @@ class BusServo:
         ids, yields while it waits, and ends once the reply has come (then
         battery or positions hold it). It raises as read_battery() does."""
         kind = ids is not None  # 0: the battery, 1: positions (as in _waiting)
+        waiting = self._waiting
         if timeout_ms is None:
             timeout_ms = _TIMEOUT_MS + (kind and _TIMEOUT_PER_ID_MS * _count("ids", ids, 84))
         _check("timeout_ms", timeout_ms, 0, _TIMEOUT_MAX_MS)
@@ -348,13 +350,17 @@ class BusServo:
                 # replies come (as events), for as long as this query would
                 # wait for its own, and a late one, in the worst case.
                 if (
-                    not self._waiting[kind]
+                    not (waiting[kind] or waiting[kind + 2])
                     or time.ticks_diff(time.ticks_ms(), start) > timeout_ms + _LATE_MS
                 ):
                     break
                 yield
             self._hold(got)
-        self._waiting[kind] = 0  # what has not come by now is too late to count
+        # What has not come by now is given up on. Yet it may come, later still, and
+        # be taken for this query's answer: then this query's own reply comes after
+        # it, and the next query of this kind waits for that one as it did here.
+        waiting[kind + 2] = waiting[kind]
+        waiting[kind] = 0
         if kind:
             self.request_positions(ids)  # checks the ids
         else:
@@ -366,7 +372,7 @@ class BusServo:
             if late or time.ticks_diff(time.ticks_ms(), deadline) >= 0:
                 late += 1
             got = self._next_frame()
-            if not self._waiting[kind]:
+            if not waiting[kind]:
                 return  # the reply: it matched the request
             if got is None and late or late > _QUEUE:
                 raise OSError(errno.ETIMEDOUT)
@@ -482,19 +488,25 @@ class BusServo:
             self.times = rx[f + 5] | rx[f + 6] << 8
         elif cmd == CMD_ACTION_GROUP_STOP:
             self.running = False
-        elif cmd == CMD_GET_BATTERY_VOLTAGE:
-            self.battery = rx[f + 4] | rx[f + 5] << 8
-            if self._waiting[0]:
-                self._waiting[0] -= 1  # it answers the oldest request in flight
-        else:  # positions: they answer the request in flight if they have its ids, in order
-            asked = self._asked
-            answers = self._waiting[1] and asked[0] == rx[f + 4]
-            k = 1
-            for i in range(f + 5, f + 5 + 3 * rx[f + 4], 3):
-                # signed 16-bit, as a servo near 0 may say -3
-                position = ((rx[i + 1] | rx[i + 2] << 8) ^ 0x8000) - 0x8000
-                self.positions[rx[i]] = position
-                answers = answers and asked[k] == rx[i]
-                k += 1
-            if answers or self._waiting[1] > 1:  # in order: an older request's, if not ours
-                self._waiting[1] -= 1
+        else:  # a reply: the battery, or positions
+            waiting = self._waiting
+            kind = cmd == CMD_MULT_SERVO_POS_READ  # as in _waiting
+            if kind:  # they answer the request in flight only if they have its ids, in order
+                asked = self._asked
+                answers = asked[0] == rx[f + 4]
+                k = 1
+                for i in range(f + 5, f + 5 + 3 * rx[f + 4], 3):
+                    # signed 16-bit, as a servo near 0 may say -3
+                    position = ((rx[i + 1] | rx[i + 2] << 8) ^ 0x8000) - 0x8000
+                    self.positions[rx[i]] = position
+                    answers = answers and asked[k] == rx[i]
+                    k += 1
+            else:
+                self.battery = rx[f + 4] | rx[f + 5] << 8
+                answers = True
+            # It answers the oldest request of its kind in flight (if it does not match
+            # that, an older one's, if there is one), or else one a query gave up on.
+            if waiting[kind] and (answers or waiting[kind] > 1):
+                waiting[kind] -= 1
+            elif waiting[kind + 2]:
+                waiting[kind + 2] -= 1

@@ -159,7 +159,8 @@ class BusServo:
 
         Replies to earlier requests of its kind (request_battery(), a query that timed out)
         come first, as events: it lets them come, for as long as it would wait for its own
-        reply and 100 ms more, before it asks. Frames that come in meanwhile are applied to
+        reply and 100 ms more, before it asks. A reply later still is taken for this answer;
+        the next query then waits for this one's own reply in the same way. Frames that come in meanwhile are applied to
         the state at once and returned by the next poll() calls. Raises ValueError or
         TypeError for a bad timeout_ms (before anything is written), and OSError(EIO) if the
         UART takes nothing."""

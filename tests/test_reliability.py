@@ -141,6 +141,44 @@ class Wire(unittest.TestCase):
             self.assertEqual(bus.read_positions([3]), {3: 500}, port)
             self.assertEqual(bus.positions[1], 111, port)  # the late reply, as an event
 
+    def test_after_a_very_late_reply_queries_back_to_back_catch_up_at_once(self):
+        # A reply 400 ms late comes after the next query has waited for it (100 + 100 ms)
+        # and asked: that query takes it, and cannot know. Its own reply comes next; the
+        # query after it waits for that one, so no further answer is one behind.
+        for port, w, bus in ports():
+            w.late(400)
+            self.assertTrue(timed_out(bus.read_battery), port)
+            got = []
+            for mv in (7100, 6900, 6800, 6700):
+                w.sim.battery = mv
+                got.append(bus.read_battery())
+            self.assertEqual(got[1:], [6900, 6800, 6700], port)
+
+            w.late(400)
+            self.assertTrue(timed_out(lambda b=bus: b.read_positions([1])), port)
+            got = []
+            for position in (600, 700, 800):  # servo 1 goes there at once (time 0)
+                w.sim.write(
+                    b"\x55\x55\x08\x03\x01\x00\x00\x01" + bytes((position & 0xFF, position >> 8))
+                )
+                got.append(bus.read_positions([1])[1])
+            self.assertEqual(got[1:], [700, 800], port)
+
+    def test_a_reply_that_never_came_delays_the_next_two_queries_once(self):
+        for port, w, bus in ports():
+            w.sim.silent = True
+            self.assertTrue(timed_out(bus.read_battery), port)
+            w.sim.silent = False
+            took = []
+            for _ in range(4):
+                start = w.clock.now_us
+                self.assertEqual(bus.read_battery(), 7500, port)
+                took.append((w.clock.now_us - start) // 1000)
+            # Each of the first two waits out the missing reply (its timeout and 100 ms
+            # more); then a round trip is about 10.4 ms again.
+            self.assertTrue(all(200 <= ms <= 230 for ms in took[:2]), (port, took))
+            self.assertTrue(all(ms <= 15 for ms in took[2:]), (port, took))
+
     def test_every_request_in_flight_is_answered_before_a_query_asks(self):
         for port, w, bus in ports():
             bus.request_battery()
