@@ -35,7 +35,7 @@ _TIMEOUT_MAX_MS = const(60000)
 _LATE_MS = const(100)  # how long after its query gave up a reply may still come
 _GAP_MS = const(20)  # a frame's bytes come closer together than this, FIFOs and all
 _TICKS = const(0x3FFFFFFF)  # ticks modulo 2**30, as a 32-bit port's wrap
-_AHEAD_MS = const(10000)  # more ahead than this (9.6 KB at 9600 baud): ticks came round
+_AHEAD_MS = const(40000)  # more ahead than this: ticks came round (rp2's largest txbuf: 34 s)
 _SLACK_MS = const(50)  # for a UART's transmit buffer to make room, beyond the wire time
 
 # The Length of each frame the controller sends, by its command (0: it sends

@@ -160,10 +160,10 @@ class BusServo:
         Replies to earlier requests of its kind (request_battery(), a query that timed out)
         come first, as events: it lets them come, for as long as it would wait for its own
         reply and 100 ms more, before it asks. A reply later still is taken for this answer;
-        the next query then waits for this one's own reply in the same way. Frames that come in meanwhile are applied to
-        the state at once and returned by the next poll() calls. Raises ValueError or
-        TypeError for a bad timeout_ms (before anything is written), and OSError(EIO) if the
-        UART takes nothing."""
+        the next query then waits for this one's own reply in the same way. Frames that
+        come in meanwhile are applied to the state at once and returned by the next poll()
+        calls. Raises ValueError or TypeError for a bad timeout_ms (before anything is
+        written), and OSError(EIO) if the UART takes nothing."""
     def read_positions(self, ids: Sequence[int], timeout_ms: int | None = None) -> dict[int, int]:
         """{servo_id: position} for 1..84 servos; positions are signed (a servo near 0 may
         say -3). Raises OSError(ETIMEDOUT) if no reply comes; the default timeout is 100 ms
