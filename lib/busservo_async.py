@@ -52,7 +52,7 @@ class AsyncBusServo:
         # seen yet: an end that comes now is an earlier group's), True (running),
         # or how it ended.
         self._run = None
-        self._group = None  # the group run_group() started
+        self._group = None  # (group, times) of the run run_group() started
         self._asking = asyncio.Lock()  # one query on the bus at a time
 
     def __getattr__(self, name):
@@ -83,7 +83,7 @@ class AsyncBusServo:
         """As BusServo.run_group()."""
         self.bus.run_group(group, times)
         self._run = False  # an end before its RUN comes back is an earlier group's
-        self._group = group
+        self._group = (group, times)  # its RUN comes back with both, as sent
 
     async def wait_group_done(self, timeout_ms=None):
         """Wait for the action group the last run_group() started to end (or,
@@ -152,14 +152,15 @@ class AsyncBusServo:
             if cmd is None:
                 return
             end = cmd == CMD_ACTION_GROUP_COMPLETE or cmd == CMD_ACTION_GROUP_STOP
-            if cmd == CMD_ACTION_GROUP_RUN and self._run is False and bus.group == self._group:
+            ours = (bus.group, bus.times) == self._group  # the frame's group and times
+            if cmd == CMD_ACTION_GROUP_RUN and self._run is False and ours:
                 self._run = True  # the group run_group() started has started
             elif end and (
                 self._run is True
                 # its RUN lost on the line: its COMPLETE still names it
                 or self._run is False
                 and cmd == CMD_ACTION_GROUP_COMPLETE
-                and bus.group == self._group
+                and ours
             ):
                 self._run = cmd
             for waiter in self._waiters:

@@ -456,6 +456,19 @@ class Async(unittest.TestCase):
             self.assertEqual((how, group), (CMD_ACTION_GROUP_COMPLETE, 2), port)
             self.assertTrue(1990000 < took < 2100000, (port, took))
 
+    def test_wait_group_done_tells_two_runs_of_one_group_apart_by_their_times(self):
+        async def main(w, bus):
+            bus.run_group(1, 1)  # 500 ms
+            bus.run_group(1, 2)  # at once, before the first RUN is back: 1000 ms
+            start = w.clock.now_us
+            how = await bus.wait_group_done()  # not the STOP of the first run
+            return how, bus.times, w.clock.now_us - start
+
+        for port, w, bus in async_ports():
+            how, times, took = asyncio.run(main(w, bus))
+            self.assertEqual((how, times), (CMD_ACTION_GROUP_COMPLETE, 2), port)
+            self.assertTrue(990000 < took < 1100000, (port, took))
+
     def test_wait_group_done_after_a_run_that_stops_the_running_group(self):
         async def main(w, bus):
             bus.run_group(2, 0)  # forever
