@@ -81,6 +81,7 @@ class AsyncBusServo:
 
     def run_group(self, group, times=1):
         """As BusServo.run_group()."""
+        self._dispatch()  # frames already in are earlier runs'
         self.bus.run_group(group, times)
         self._run = False  # an end before its RUN comes back is an earlier group's
         self._group = (group, times)  # its RUN comes back with both, as sent

@@ -469,6 +469,21 @@ class Async(unittest.TestCase):
             self.assertEqual((how, times), (CMD_ACTION_GROUP_COMPLETE, 2), port)
             self.assertTrue(990000 < took < 1100000, (port, took))
 
+    def test_wait_group_done_after_the_same_run_again_waits_for_the_new_one(self):
+        async def main(w, bus, gap):
+            bus.run_group(1)  # 500 ms
+            await busservo_async.asyncio.sleep_ms(gap)  # no task reads the bus meanwhile
+            bus.run_group(1)  # the frames of the first run are in, unread
+            start = w.clock.now_us
+            how = await bus.wait_group_done()
+            return how, w.clock.now_us - start
+
+        for gap in (100, 600):
+            for port, w, bus in async_ports():
+                how, took = asyncio.run(main(w, bus, gap))
+                self.assertEqual(how, CMD_ACTION_GROUP_COMPLETE, (port, gap))
+                self.assertTrue(490000 < took < 600000, (port, gap, took))
+
     def test_wait_group_done_after_a_run_that_stops_the_running_group(self):
         async def main(w, bus):
             bus.run_group(2, 0)  # forever
