@@ -1,6 +1,7 @@
 # Heap bytes per call, measured as gc.mem_alloc() deltas with the collector
 # off. Exact and repeatable on MicroPython, so these are tests, not benchmarks.
 import gc
+import micropython
 import unittest
 
 import busservo
@@ -87,6 +88,44 @@ class Allocation(unittest.TestCase):
     def test_wire_ms_allocates_nothing(self):
         self.bus.move(1, 500, 0)  # with the wire busy, and idle
         self.assertNoHeap(self.bus.wire_ms)
+
+    def test_the_hot_paths_run_with_the_heap_locked(self):
+        # Stricter than a net change of 0: MicroPython's VM keeps a big function's locals
+        # (the parser's) in a heap block for the call's length, and with the heap locked it
+        # must fall back to the C stack. Every call runs once, then again with the lock on.
+        bus = self.bus
+        six = [(1, 100), (2, 200), (3, 300), (4, 400), (5, 500), (6, 600)]
+        ids = (1, 2, 3, 4, 5, 6)
+        frames = (RUN_8_ONCE, STOP, COMPLETE_8_ONCE, BATTERY_7500, POSITIONS_ALL_500)
+        got = [None] * (len(frames) + 1)  # made before the lock: filled, never grown
+
+        def hot():
+            bus.move(1, 500, 1000)  # cut by the UART, then finished
+            bus.move_many(six, 1000)
+            bus.run_group(8, 1)
+            bus.stop_group()
+            bus.set_group_speed(busservo.ALL_GROUPS, 200)
+            bus.unload(ids)
+            bus.request_battery()
+            bus.request_positions(ids)
+            bus.wire_ms()
+            for i in range(len(got)):
+                got[i] = bus.poll()  # one frame a call, decoded where it lies
+
+        for locked in (False, True):
+            self.uart.clear()
+            for frame in frames:
+                self.uart.feed(frame)
+            self.uart.takes = [3, None, 100]
+            if locked:
+                micropython.heap_lock()
+            try:
+                hot()
+            finally:
+                if locked:
+                    micropython.heap_unlock()
+            self.assertEqual(got, [6, 7, 8, 15, 21, None])
+            self.assertEqual(bus.battery, 7500)
 
     def test_the_fake_uart_itself_allocates_nothing(self):
         # Else the figures above would measure the fake, not the driver.
