@@ -260,6 +260,16 @@ class Resync(unittest.TestCase):
             self.assertEqual(got + drain(bus), expect, "cut at %d" % cut)
             self.assertEqual((bus.running, bus.group), (False, 8))
 
+    def test_noise_that_forms_a_frame_start_is_taken_for_that_frame(self):
+        # What no checksum can tell (the README says so): 55 55 04 0F is a battery
+        # frame's start, so the next two bytes, the RUN's header, are its reading;
+        # the RUN's other five bytes are noise, and the STOP behind them comes.
+        self.assertFrames(
+            b"\x55\x55\x04\x0f" + RUN_8_ONCE + STOP,
+            [CMD_GET_BATTERY_VOLTAGE, CMD_ACTION_GROUP_STOP],
+            {"battery": 0x5555, "group": None, "noise": 5},
+        )
+
     def test_memory_stays_bounded_under_endless_noise(self):
         import gc
 
