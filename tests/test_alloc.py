@@ -40,11 +40,12 @@ class Allocation(unittest.TestCase):
     def assertNoHeap(self, call, before=None):
         self.assertEqual(heap_per_call(call, before), 0)
 
-    def test_commands_allocate_nothing(self):
+    def commands(self):
+        # Every command, as a call; move() first.
         bus = self.bus
         six = [(1, 100), (2, 200), (3, 300), (4, 400), (5, 500), (6, 600)]
         ids = (1, 2, 3, 4, 5, 6)
-        for call in (
+        return (
             lambda: bus.move(1, 500, 1000),
             lambda: bus.move_many(six, 1000),
             lambda: bus.run_group(8, 1),
@@ -53,7 +54,10 @@ class Allocation(unittest.TestCase):
             lambda: bus.unload(ids),
             lambda: bus.request_battery(),
             lambda: bus.request_positions(ids),
-        ):
+        )
+
+    def test_commands_allocate_nothing(self):
+        for call in self.commands():
             self.uart.clear()
             self.assertNoHeap(call)
 
@@ -94,20 +98,13 @@ class Allocation(unittest.TestCase):
         # (the parser's) in a heap block for the call's length, and with the heap locked it
         # must fall back to the C stack. Every call runs once, then again with the lock on.
         bus = self.bus
-        six = [(1, 100), (2, 200), (3, 300), (4, 400), (5, 500), (6, 600)]
-        ids = (1, 2, 3, 4, 5, 6)
+        commands = self.commands()
         frames = (RUN_8_ONCE, STOP, COMPLETE_8_ONCE, BATTERY_7500, POSITIONS_ALL_500)
         got = [None] * (len(frames) + 1)  # made before the lock: filled, never grown
 
         def hot():
-            bus.move(1, 500, 1000)  # cut by the UART, then finished
-            bus.move_many(six, 1000)
-            bus.run_group(8, 1)
-            bus.stop_group()
-            bus.set_group_speed(busservo.ALL_GROUPS, 200)
-            bus.unload(ids)
-            bus.request_battery()
-            bus.request_positions(ids)
+            for call in commands:  # move(), the first, is cut by the UART, then finished
+                call()
             bus.wire_ms()
             for i in range(len(got)):
                 got[i] = bus.poll()  # one frame a call, decoded where it lies
