@@ -123,6 +123,8 @@ class Allocation(unittest.TestCase):
                     micropython.heap_unlock()
             self.assertEqual(got, [6, 7, 8, 15, 21, None])
             self.assertEqual(bus.battery, 7500)
+            self.assertEqual(self.uart.takes, [])  # the cut path ran: 3 bytes, none, the rest
+            self.assertEqual(self.uart.written()[:10], bytes.fromhex("5555080301e80301f401"))
 
     def test_the_fake_uart_itself_allocates_nothing(self):
         # Else the figures above would measure the fake, not the driver.
