@@ -20,7 +20,12 @@
 #   power_cycle() forgets it, as the controller does at power-off;
 # - unload lets servos go limp where they are (`limp`) until they are moved;
 # - the battery reads `battery` mV;
-# - a malformed frame counts one `beeps` (the controller's "beep beep").
+# - a malformed frame counts one `beeps` (the controller's "beep beep");
+# - it is at the far end of a 9600-baud line (`baudrate`; 10 bits a byte): a frame
+#   written to it is in once its last byte would have arrived, and what it says
+#   comes out a byte every 1.04 ms behind what it said before. So a reply comes
+#   no sooner than on a real wire, where the driver looks for it (baudrate=None:
+#   no line, every byte at once, for a test world that models the line itself).
 # Time comes from time.ticks_ms(), or from the ticks_ms function given, which a
 # test can step. Setting `silent` makes it answer nothing at all, as a controller
 # with its TX unplugged; so does the frame 55 55 03 F0 01 (F0 00 undoes it),
@@ -50,7 +55,7 @@ _SPAN = 1 << 27
 
 
 class SimController:
-    def __init__(self, groups=None, battery=7500, ticks_ms=time.ticks_ms):
+    def __init__(self, groups=None, battery=7500, ticks_ms=time.ticks_ms, baudrate=9600):
         self.groups = dict(GROUPS if groups is None else groups)
         self.battery = battery
         self.silent = False
@@ -59,6 +64,7 @@ class SimController:
         self.pwm = set()
         self.limp = set()
         self._ticks_ms = ticks_ms
+        self._byte_us = baudrate and 10000000 // baudrate  # None: no line
         self._servos = {}  # id: (from, to, start ticks, time_ms)
         self._in = bytearray()  # written by the driver, not yet decoded
         self._out = bytearray()  # for the driver to read
@@ -70,6 +76,10 @@ class SimController:
         self._running = None  # (group, times, end ticks or None for forever, ms after end)
         self._in = bytearray()
         self._out = bytearray()
+        # The line: when (ticks) what was written is in, and when what it says
+        # has gone; [start ticks, bytes, bytes read] of each frame said, not yet read.
+        self._in_at = self._out_at = self._frame_in = self._ticks_ms()
+        self._said = []
 
     def position(self, servo_id):
         """Where servo_id is now."""
@@ -93,7 +103,17 @@ class SimController:
 
     def any(self):
         self._tick()
-        return len(self._out)
+        if not self._byte_us:
+            return len(self._out)
+        n = 0  # the bytes that have come down the line by now
+        now = self._ticks_ms()
+        for start, size, read in self._said:
+            come = min(size, time.ticks_diff(now, start) * 1000 // self._byte_us)
+            if come > 0:
+                n += come - read
+            if come < size:
+                break  # the rest are behind it
+        return n
 
     def readinto(self, buf, nbytes=None):
         n = min(self.any(), len(buf) if nbytes is None else min(nbytes, len(buf)))
@@ -101,7 +121,7 @@ class SimController:
             return None
         for i in range(n):
             buf[i] = self._out[i]
-        self._out = self._out[n:]
+        self._take(n)
         return n
 
     def read(self, nbytes=None):
@@ -109,8 +129,19 @@ class SimController:
         if not n:
             return None
         data = bytes(self._out[:n])
-        self._out = self._out[n:]
+        self._take(n)
         return data
+
+    def _take(self, n):
+        self._out = self._out[n:]
+        said = self._said
+        while n and said:
+            frame = said[0]
+            k = min(n, frame[1] - frame[2])
+            frame[2] += k
+            n -= k
+            if frame[2] == frame[1]:
+                said.pop(0)
 
     def write(self, buf, off=None, nbytes=None):
         # The stream protocol's forms: write(buf), write(buf, n), write(buf, off, n).
@@ -119,15 +150,33 @@ class SimController:
         off = min(off, len(buf))
         n = min(nbytes, len(buf) - off)
         self._in += buf[off : off + n]
+        if self._byte_us:  # its bytes are in when the line has brought them
+            now = self._ticks_ms()
+            start = self._in_at if time.ticks_diff(self._in_at, now) > 0 else now
+            self._in_at = time.ticks_add(start, self._line_ms(n))
         self._tick()
         self._decode()
         return n
 
     # The controller.
 
-    def _send(self, cmd, *params):
-        if not self.silent:
-            self._out += bytes((0x55, 0x55, len(params) + 2, cmd) + params)
+    def _line_ms(self, n):
+        # How long n bytes take on the line, in whole ms (rounded up).
+        return (n * self._byte_us + 999) // 1000
+
+    def _send(self, cmd, *params, at=None):
+        # Say a frame: at once, or on the line from when `at` (ticks: by default,
+        # when the frame it answers was in) and the line is free.
+        if self.silent:
+            return
+        frame = bytes((0x55, 0x55, len(params) + 2, cmd) + params)
+        self._out += frame
+        if self._byte_us:
+            start = self._frame_in if at is None else at
+            if time.ticks_diff(self._out_at, start) > 0:
+                start = self._out_at
+            self._out_at = time.ticks_add(start, self._line_ms(len(frame)))
+            self._said.append([start, len(frame), 0])
 
     def _tick(self):
         # An action group that has run its course completes. A long run's end
@@ -137,7 +186,7 @@ class SimController:
             group, times, end, rest = run
             if not rest:
                 self._running = None
-                self._send(CMD_ACTION_GROUP_COMPLETE, group, times & 0xFF, times >> 8)
+                self._send(CMD_ACTION_GROUP_COMPLETE, group, times & 0xFF, times >> 8, at=end)
                 return
             step = min(rest, _SPAN)
             run = self._running = (group, times, time.ticks_add(end, step), rest - step)
@@ -165,6 +214,10 @@ class SimController:
                 break
             i += length + 2
             self._in = d[i:]  # taken before it is done: a frame that raises is gone
+            if self._byte_us:  # it was in before the bytes behind it came
+                self._frame_in = time.ticks_add(
+                    self._in_at, -((len(d) - i) * self._byte_us // 1000)
+                )
             self._do(cmd, bytes(d[i - length + 2 : i]))  # its parameters
         self._in = d[i:]
 

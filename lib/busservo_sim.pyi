@@ -18,7 +18,11 @@ It decodes what the driver writes and answers as the protocol says:
   forgets it, as the controller does at power-off;
 - unload lets servos go limp where they are (`limp`) until they are moved;
 - the battery reads `battery` mV;
-- a malformed frame counts one `beeps` (the controller's "beep beep").
+- a malformed frame counts one `beeps` (the controller's "beep beep");
+- it is at the far end of a 9600-baud line (10 bits a byte): a frame written to it is in once
+  its last byte would have arrived, and what it says comes out a byte every 1.04 ms behind
+  what it said before, so a reply comes no sooner than on a real wire (baudrate=None: no
+  line, every byte at once, for a test world that models the line itself).
 Setting `silent` makes it answer nothing at all, as a controller with its TX unplugged; so
 does the frame 55 55 03 F0 01 (F0 00 undoes it), which a real controller would beep at.
 """
@@ -59,9 +63,11 @@ class SimController:
         groups: Mapping[int, int] | None = None,
         battery: int = 7500,
         ticks_ms: Callable[[], int] = ...,
+        baudrate: int | None = 9600,
     ) -> None:
         """groups: {group: ms per run} (None: GROUPS); battery in mV. Time comes from
-        time.ticks_ms(), or from the ticks_ms function given, which a test can step."""
+        time.ticks_ms(), or from the ticks_ms function given, which a test can step.
+        baudrate: the line's, which paces what goes in and out (None: no line)."""
     def power_cycle(self) -> None:
         """Power off and on: groups stop (silently) and speeds are forgotten."""
     def position(self, servo_id: int) -> int:
@@ -73,7 +79,7 @@ class SimController:
         """The group running now, or None."""
     # machine.UART's methods, as the driver sees them.
     def any(self) -> int:
-        """How many bytes it has answered that are not read yet."""
+        """How many bytes of what it answered have come down the line and are not read yet."""
     def readinto(self, buf: bytearray | memoryview, nbytes: int | None = None) -> int | None:
         """Read at most nbytes (default len(buf)) into buf: how many, or None for none."""
     def read(self, nbytes: int | None = None) -> bytes | None:

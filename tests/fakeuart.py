@@ -2,7 +2,7 @@
 #
 #   uart = FakeUART()
 #   uart.feed(b"\x55\x55\x02\x07")             # bytes the controller "sent"
-#   uart.reply(request, response, delay_ms=5)  # answer a write, after a while
+#   uart.reply(request, response, delay_ms=5)  # answer a write, 5 ms later than the wire could
 #   uart.chunks = [1]                          # readinto() hands out 1 byte a call
 #   uart.takes = [3, None]                     # write() takes 3 bytes, then none, then all
 #   uart.written()                             # every byte the driver wrote
@@ -10,7 +10,12 @@
 # Like machine.UART, read() and readinto() return None when nothing is waiting
 # and any() counts the bytes waiting. any(), readinto() and write() allocate
 # nothing (when no reply is scripted), so allocation tests can use it too.
+# Like a controller on a 9600-baud line, a scripted reply comes no sooner than
+# the wire allows: once the request's last byte has left (behind what was
+# written before it, a byte every 1042 us) and the reply's own bytes have come.
 import time
+
+BYTE_US = 1042  # 10 bits at 9600 baud, rounded up
 
 
 class FakeUART:
@@ -26,6 +31,7 @@ class FakeUART:
         self._replies = {}
         self._since = 0  # where in _out the request being written in parts began
         self._later = []  # [(due ticks_ms, bytes)], in order
+        self._idle = time.ticks_us()  # when what was written has left the wire
 
     # What the tests do.
 
@@ -111,6 +117,10 @@ class FakeUART:
                 return None
             if nbytes > take:
                 nbytes = take
+        now = time.ticks_us()
+        if time.ticks_diff(self._idle, now) < 0:
+            self._idle = now
+        self._idle = time.ticks_add(self._idle, nbytes * BYTE_US)
         out = self._out
         at = self._nout
         if at + nbytes > len(out):
@@ -135,10 +145,9 @@ class FakeUART:
                 if isinstance(response, list):
                     response = response.pop(0) if response else None
                 if response:
-                    if answer[1]:
-                        self.feed_later(response, answer[1])
-                    else:
-                        self.feed(response)
+                    wire_us = time.ticks_diff(self._idle, time.ticks_us())
+                    wire_us += len(response) * BYTE_US
+                    self.feed_later(response, answer[1] + (wire_us + 999) // 1000)
                 return
             for request in self._replies:
                 if request.startswith(got):  # more to come

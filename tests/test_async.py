@@ -154,9 +154,9 @@ class Async(unittest.TestCase):
         self.assertEqual(run(main()), CMD_ACTION_GROUP_COMPLETE)
 
     def test_events_yield_every_frame_none_lost(self):
-        self.uart.reply(GET_BATTERY, BATTERY_7500, delay_ms=20)
-        self.uart.feed_later(RUN_8_ONCE, 5)
-        self.uart.feed_later(COMPLETE_8_ONCE, 30)
+        self.uart.reply(GET_BATTERY, BATTERY_7500, delay_ms=20)  # in about 31 ms
+        self.uart.feed_later(RUN_8_ONCE, 5)  # during the query
+        self.uart.feed_later(COMPLETE_8_ONCE, 60)  # after it
 
         async def listen(got):
             async for cmd in self.bus.events():

@@ -129,8 +129,8 @@ class Queries(unittest.TestCase):
         self.assertEqual((self.bus.battery, self.bus.positions), (7500, ALL_500))
 
     def test_more_frames_than_the_queue_holds_are_counted_not_hidden(self):
-        self.uart.reply(GET_BATTERY, STOP * 40 + BATTERY_7500)
-        self.assertEqual(self.bus.read_battery(), 7500)
+        self.uart.reply(GET_BATTERY, STOP * 40 + BATTERY_7500)  # 173 ms on the wire
+        self.assertEqual(self.bus.read_battery(timeout_ms=300), 7500)
         held = 0
         while self.bus.poll() is not None:
             held += 1

@@ -1,4 +1,7 @@
-# The simulated controller, driven by the real driver, on a clock the tests step.
+# The simulated controller, driven by the real driver, on a clock the tests step:
+# with no line (baudrate=None), so what it says is there at once and its replies
+# are read straight from it; then its line, which makes a reply come no sooner
+# than over a 9600-baud wire.
 import time
 import unittest
 
@@ -16,6 +19,22 @@ from test_frames import drain as events
 RUN_8 = bytes((0x55, 0x55, 0x05, 0x06, 0x08, 0x01, 0x00))
 BATTERY = bytes((0x55, 0x55, 0x02, 0x0F))
 BATTERY_7500 = bytes((0x55, 0x55, 0x04, 0x0F, 0x4C, 0x1D))
+
+
+def read_positions(sim, ids):
+    """CMD_MULT_SERVO_POS_READ, straight to a simulator with no line: {id: position}."""
+    sim.write(bytes((0x55, 0x55, len(ids) + 3, 0x15, len(ids)) + tuple(ids)))
+    r = sim.read()
+    assert r[:5] == bytes((0x55, 0x55, 3 * len(ids) + 3, 0x15, len(ids))), r
+    return {r[i]: r[i + 1] | r[i + 2] << 8 for i in range(5, len(r), 3)}
+
+
+def read_battery(sim):
+    """CMD_GET_BATTERY_VOLTAGE, straight to a simulator with no line: mV."""
+    sim.write(BATTERY)
+    r = sim.read()
+    assert r[:4] == BATTERY_7500[:4], r
+    return r[4] | r[5] << 8
 
 
 class Clock:
@@ -58,25 +77,27 @@ class BoardTime:
 class Simulator(unittest.TestCase):
     def setUp(self):
         self.clock = Clock()
-        self.sim = SimController(groups={1: 500, 2: 2000, 8: 1500}, ticks_ms=self.clock)
+        self.sim = SimController(
+            groups={1: 500, 2: 2000, 8: 1500}, ticks_ms=self.clock, baudrate=None
+        )
         self.bus = busservo.BusServo(self.sim)
 
     def test_servos_move_linearly_to_their_targets(self):
         self.bus.move_many([(1, 900), (2, 100)], 1000)
-        self.assertEqual(self.bus.read_positions([1, 2]), {1: 500, 2: 500})
+        self.assertEqual(read_positions(self.sim, [1, 2]), {1: 500, 2: 500})
         self.clock.step(250)
-        self.assertEqual(self.bus.read_positions([1, 2]), {1: 600, 2: 400})
+        self.assertEqual(read_positions(self.sim, [1, 2]), {1: 600, 2: 400})
         self.clock.step(750)
-        self.assertEqual(self.bus.read_positions([1, 2]), {1: 900, 2: 100})
+        self.assertEqual(read_positions(self.sim, [1, 2]), {1: 900, 2: 100})
         self.clock.step(5000)
-        self.assertEqual(self.bus.read_positions([2]), {2: 100})
+        self.assertEqual(read_positions(self.sim, [2]), {2: 100})
 
     def test_a_new_move_starts_from_where_the_servo_is(self):
         self.bus.move(3, 1000, 1000)
         self.clock.step(500)  # at 750
         self.bus.move(3, 250, 500)
         self.clock.step(250)
-        self.assertEqual(self.bus.read_positions([3]), {3: 500})
+        self.assertEqual(read_positions(self.sim, [3]), {3: 500})
 
     def test_move_with_no_time_is_there_at_once(self):
         self.bus.move(4, 42, 0)
@@ -85,7 +106,7 @@ class Simulator(unittest.TestCase):
     def test_a_target_beyond_1000_stops_at_1000_and_is_counted(self):
         # The wire carries 0..65535; a servo turns 0..1000 and stops at its end.
         self.bus.move_many([(1, 1001), (2, 65535), (3, 1000)], 0)
-        self.assertEqual(self.bus.read_positions([1, 2, 3]), {1: 1000, 2: 1000, 3: 1000})
+        self.assertEqual(read_positions(self.sim, [1, 2, 3]), {1: 1000, 2: 1000, 3: 1000})
         self.assertEqual(self.sim.clamped, 2)
         self.bus.move(1, 0, 0)
         self.assertEqual((self.sim.position(1), self.sim.clamped), (0, 2))
@@ -93,7 +114,7 @@ class Simulator(unittest.TestCase):
     def test_a_pwm_servo_turns_to_2500_and_stops_there(self):
         self.sim.pwm.add(6)  # a PWM servo on an LSC board: 500..2500 us
         self.bus.move_many([(6, 2400), (1, 2400)], 0)
-        self.assertEqual(self.bus.read_positions([6, 1]), {6: 2400, 1: 1000})
+        self.assertEqual(read_positions(self.sim, [6, 1]), {6: 2400, 1: 1000})
         self.bus.move(6, 3000, 0)
         self.assertEqual((self.sim.position(6), self.sim.clamped), (2500, 2))
 
@@ -148,14 +169,14 @@ class Simulator(unittest.TestCase):
         self.bus.unload([5, 6])
         self.assertEqual(self.sim.limp, {5, 6})
         self.clock.step(1000)
-        self.assertEqual(self.bus.read_positions([5]), {5: 700})
+        self.assertEqual(read_positions(self.sim, [5]), {5: 700})
         self.bus.move(5, 100, 0)
         self.assertEqual(self.sim.limp, {6})
 
     def test_battery(self):
-        self.assertEqual(self.bus.read_battery(), 7500)
+        self.assertEqual(read_battery(self.sim), 7500)
         self.sim.battery = 6800
-        self.assertEqual(self.bus.read_battery(), 6800)
+        self.assertEqual(read_battery(self.sim), 6800)
 
     def test_malformed_frames_beep(self):
         self.sim.write(bytes((0x55, 0x55, 0x09, 0x07)))  # STOP of the wrong length
@@ -181,7 +202,7 @@ class Simulator(unittest.TestCase):
         else:
             self.fail("a silent simulator answered")
         self.sim.silent = False
-        self.assertEqual(self.bus.read_battery(), 7500)
+        self.assertEqual(read_battery(self.sim), 7500)
 
     # As a UART: the stream protocol's forms, and no surprises for the caller.
 
@@ -213,7 +234,7 @@ class Simulator(unittest.TestCase):
         board = BoardTime()
         busservo_sim.time = board
         try:
-            sim = SimController(ticks_ms=board.ticks_ms)
+            sim = SimController(ticks_ms=board.ticks_ms, baudrate=None)
             bus = busservo.BusServo(sim)
             bus.set_group_speed(2, 1)
             bus.run_group(2, 65535)
@@ -237,7 +258,7 @@ class Simulator(unittest.TestCase):
         board = BoardTime()
         busservo_sim.time = board
         try:
-            sim = SimController(ticks_ms=board.ticks_ms)
+            sim = SimController(ticks_ms=board.ticks_ms, baudrate=None)
             bus = busservo.BusServo(sim)
             bus.set_group_speed(2, 1)
             bus.run_group(2, 65535)
@@ -299,6 +320,8 @@ class UartForms(unittest.TestCase):
         uart = FakeUART()
         uart.reply(BATTERY, BATTERY_7500)
         self.assertEqual(uart.write(b"x" + BATTERY, 1, 4), 4)
+        self.assertIsNone(uart.read())  # not before the wire could bring it: 10 bytes
+        time.sleep_ms(12)
         self.assertEqual(uart.read(), BATTERY_7500)
 
     def test_the_fake_uart_answers_a_request_written_in_parts(self):
@@ -310,13 +333,15 @@ class UartForms(unittest.TestCase):
         self.assertEqual(uart.write(BATTERY, 1, 3), 2)
         self.assertEqual(uart.any(), 0)
         self.assertEqual(uart.write(BATTERY, 3, 1), 1)
+        time.sleep_ms(12)
         self.assertEqual(uart.read(), BATTERY_7500)
         self.assertEqual(uart.write(BATTERY, 2), 2)  # a part, never finished
         self.assertEqual(uart.write(BATTERY), 4)  # a whole one is still answered
+        time.sleep_ms(14)
         self.assertEqual(uart.read(), BATTERY_7500[:4] + b"\x00\x00")
 
     def test_readinto_clamps_to_the_buffer(self):
-        sim = SimController()
+        sim = SimController(baudrate=None)
         sim.write(BATTERY)
         fake = FakeUART()
         fake.feed(BATTERY_7500)
@@ -328,6 +353,55 @@ class UartForms(unittest.TestCase):
             self.assertEqual(uart.readinto(buf), 1)
             self.assertEqual(buf, bytes((0x1D, 0x55, 0x04, 0x0F)))  # still 4 long
             self.assertIsNone(uart.readinto(buf, 100))
+
+
+class Line(unittest.TestCase):
+    # By default the simulator is at the far end of a 9600-baud line: 10 bits, 1.04 ms
+    # a byte, each way. A reply comes no sooner than over a real wire.
+
+    def setUp(self):
+        self.clock = Clock()
+        self.sim = SimController(ticks_ms=self.clock)
+
+    def test_a_reply_comes_once_the_request_and_its_own_bytes_have_crossed(self):
+        # 4 bytes in by 4.2 ms (5, in the simulator's whole ms), then 6 back by 10.4 ms.
+        self.sim.write(BATTERY)
+        got = []
+        for _ in range(13):
+            got.append(self.sim.any())
+            self.clock.step(1)
+        self.assertEqual(got, [0, 0, 0, 0, 0, 0, 0, 1, 2, 3, 4, 5, 6])
+        self.assertEqual(self.sim.read(), BATTERY_7500)
+
+    def test_what_it_says_queues_on_the_line(self):
+        # The RUN is in by 7.3 ms and comes back by 14.6; the battery's request is in by
+        # 11.5 ms, and its reply waits for the line: back by 20.8 (23 in whole ms).
+        self.sim.write(RUN_8 + BATTERY)
+        self.clock.step(12)
+        self.assertEqual(self.sim.read(), RUN_8[:3])
+        self.clock.step(4)
+        self.assertEqual(self.sim.read(), RUN_8[3:])
+        self.clock.step(6)
+        self.assertEqual(self.sim.read(), BATTERY_7500[:5])
+        self.clock.step(1)
+        self.assertEqual(self.sim.read(), BATTERY_7500[5:])
+        self.assertIsNone(self.sim.read())
+
+    def test_a_request_behind_others_is_in_when_they_are(self):
+        self.sim.write(bytes(96))  # 100 ms of bytes that make no frame
+        self.sim.write(BATTERY)  # in by 104.2 ms, answered by 110.4
+        self.clock.step(105)
+        self.assertEqual(self.sim.any(), 0)
+        self.clock.step(8)
+        self.assertEqual(self.sim.read(), BATTERY_7500)
+
+    def test_the_driver_reads_it_on_real_time(self):
+        bus = busservo.BusServo(SimController())
+        start = time.ticks_ms()
+        self.assertEqual(bus.read_battery(), 7500)
+        self.assertEqual(bus.read_positions([1, 2]), {1: 500, 2: 500})
+        # No sooner than the wire allows: 10 bytes, then 7 + 11 bytes.
+        self.assertTrue(time.ticks_diff(time.ticks_ms(), start) >= 28)
 
 
 if __name__ == "__main__":

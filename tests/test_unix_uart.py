@@ -278,9 +278,11 @@ class SimPty(unittest.TestCase):
         uart = self.uart
         self.assertEqual(uart.write(BATTERY), 4)
         start_ms = time.ticks_ms()
-        while uart.any() < 6 and time.ticks_diff(time.ticks_ms(), start_ms) < 5000:
+        got = b""  # the reply comes a byte at a time, at 9600 baud
+        while len(got) < 6 and time.ticks_diff(time.ticks_ms(), start_ms) < 5000:
+            got += uart.read() or b""
             time.sleep_ms(1)
-        self.assertEqual(uart.read(), BATTERY_7500)
+        self.assertEqual(got, BATTERY_7500)
         stop(self.pid)
         start_ms = time.ticks_ms()
         error = None

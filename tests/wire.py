@@ -830,7 +830,7 @@ class World:
         self._cuts = []  # keep, one a frame
         self._lates = []  # [ms, count]
         self._one = bytearray(1)
-        self._sim = busservo_sim.SimController(ticks_ms=self._sim_ms, **sim)
+        self._sim = busservo_sim.SimController(ticks_ms=self._sim_ms, baudrate=None, **sim)
         self._sim_active = False  # a group runs: look at the controller every ms
         self._poll_at = 0
         cls = _RP2 if port == "rp2" else _ESP32
