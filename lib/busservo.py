@@ -25,14 +25,15 @@ ALL_GROUPS = const(0xFF)  # CMD_ACTION_GROUP_SPEED: every downloaded group
 
 _HEADER = const(0x55)
 _FRAME_MAX = const(257)  # header + the largest Length byte, 255
-_CHUNK = const(64)  # bytes read from the UART at a time
-_RX_SIZE = const(321)  # a partial frame (256 bytes at most), and a chunk behind it
+_CHUNK = const(16)  # bytes read from the UART at a time (17 ms of them at 9600 baud)
+_RX_SIZE = const(272)  # a partial frame (256 bytes at most), and a chunk behind it
 _BUDGET = const(1028)  # bytes one poll() reads at most, so a flood of noise cannot hold it
 _QUEUE = const(32)  # frames a blocking query may hold back for poll()
 _TIMEOUT_MS = const(100)  # battery: 10 bytes at 9600 baud take about 10 ms
 _TIMEOUT_PER_ID_MS = const(10)  # 4 more bytes on the wire and one servo to ask
 _TIMEOUT_MAX_MS = const(60000)
 _LATE_MS = const(100)  # how long after its query gave up a reply may still come
+_FORGET_MS = const(1000)  # a request given up on this long ago had its reply lost
 _GAP_MS = const(20)  # a frame's bytes come closer together than this, FIFOs and all
 _TICKS = const(0x3FFFFFFF)  # ticks modulo 2**30, as a 32-bit port's wrap
 _AHEAD_MS = const(40000)  # more ahead than this: ticks came round (rp2's largest txbuf: 34 s)
@@ -62,10 +63,10 @@ def _count(name, items, high):
     try:
         n = len(items)
     except TypeError:
-        n = items  # not a sequence at all: say what it is
+        n = items  # not a sequence at all (one id, say): say what it is
         error = TypeError
     if error is TypeError or not 1 <= n <= high:
-        raise error("%s must hold 1..%d items, got %r" % (name, high, n))
+        raise error("%s must be a list of 1..%d items, got %r" % (name, high, n))
     return n
 
 
@@ -78,16 +79,13 @@ class BusServo:
         self._write = uart.write  # one lookup, not two, per command
         self._any = uart.any
         # The wire: a byte is 10 bits (8N1). _idle (ticks_ms) and _frac (us) say when what was
-        # written will have left it; _cut is a frame the UART took only part of.
+        # written will have left it.
         self._byte_us = (10000000 + baudrate - 1) // baudrate
         self._idle = time.ticks_ms()
         self._frac = 0
         self._cut_at = 0  # bytes of it sent (0: nothing is cut)
         tx = self._tx = bytearray(_FRAME_MAX)
         tx[0] = tx[1] = _HEADER  # reading never uses tx: it stays
-        # move() is the call a control loop makes most: it has a frame of its own,
-        # with the header, Length 8, CMD_SERVO_MOVE (3) and 1 servo already in place.
-        self._move = bytearray(b"\x55\x55\x08\x03\x01\0\0\0\0\0")
         # Reading: the UART's bytes go through _chunk into rx[_r:_w], where
         # frames are decoded. (readinto() cannot start mid-buffer without a
         # memoryview slice, which allocates.)
@@ -100,9 +98,12 @@ class BusServo:
         self._queued = 0
         # Replies that may still come, of each kind: [battery, positions] to the
         # requests in flight, then [battery, positions] to those a query gave up
-        # on (see ask()); and the ids of the positions asked last.
-        self._waiting = [0, 0, 0, 0]
-        self._asked = bytearray(85)  # count, ids
+        # on (see ask()); then [battery, positions]: when (ticks_ms) the last
+        # request of each kind has left the wire, and the last of those given up
+        # on. And the ids of the positions asked last, with a bit for each count
+        # of ids a positions request in flight asked for.
+        self._waiting = [0, 0, 0, 0, 0, 0, 0, 0]
+        self._asked = bytearray(96)  # count, ids; from 85, bit n of 85..95: n ids (1..84)
         self.noise = 0  # bytes read that were no frame of the controller's
         self.lost = 0  # frames not held because the queue was full
         self.running = False
@@ -125,17 +126,20 @@ class BusServo:
             _check("time_ms", time_ms, 0, 0xFFFF)
         if self._cut_at:
             self._finish()
-        frame = self._move
+        frame = self._tx  # header in place; Length 8, CMD_SERVO_MOVE (3), 1 servo
+        frame[2] = 8
+        frame[3] = CMD_SERVO_MOVE
+        frame[4] = 1
         frame[5] = time_ms
         frame[6] = time_ms >> 8
         frame[7] = servo_id
         frame[8] = position
         frame[9] = position >> 8
-        took = self._write(frame)
+        servo_id = time.ticks_ms()  # before the write, which may wait (see _sent)
+        took = self._write(frame, 10)
         if took != 10:
-            self._finish(frame, took)
-        else:  # the usual case: the UART took it all. _sent(10), inline (see there).
-            servo_id = time.ticks_ms()
+            self._finish(took, servo_id)
+        else:  # the usual case: the UART took it all. _sent(10, now), inline (see there).
             position = 10 * self._byte_us
             if (self._idle - servo_id) & _TICKS < _AHEAD_MS:
                 servo_id = self._idle
@@ -204,14 +208,24 @@ class BusServo:
 
     def _went(self, cmd):
         # A frame has gone whole (tx holds it). If a request, one more reply
-        # may come: count it, so that no reply answers a later request.
+        # may come: count it, so that no reply answers a later request, and
+        # note when it will have left the wire (2 ms early, and 0.1 % of what is
+        # ahead, for the rounding of ms and of a byte's 1041.7 us up to 1042).
         kind = cmd == CMD_MULT_SERVO_POS_READ
         if kind or cmd == CMD_GET_BATTERY_VOLTAGE:
-            self._waiting[kind] += 1
+            waiting = self._waiting
+            waiting[kind + 4] = time.ticks_add(self._idle, -2 - (self.wire_ms() >> 10))
             if kind:
+                asked = self._asked
+                if not (waiting[1] or waiting[3]):  # none in flight: forget the old counts
+                    for i in range(85, 96):
+                        asked[i] = 0
                 tx = self._tx
-                for i in range(tx[4] + 1):
-                    self._asked[i] = tx[4 + i]  # the count and the ids, as sent
+                n = tx[4]
+                asked[85 + (n >> 3)] |= 1 << (n & 7)
+                for i in range(n + 1):
+                    asked[i] = tx[4 + i]  # the count and the ids, as sent
+            waiting[kind] += 1
 
     def _group_cmd(self, cmd, group, name, value):
         _check("group", group, 0, 0xFF)
@@ -255,18 +269,20 @@ class BusServo:
         tx[2] = nparams + 2
         tx[3] = cmd
         n = nparams + 4
+        now = time.ticks_ms()
         took = self._write(tx, n)  # the first n bytes, without a slice
         if took == n:
-            self._sent(n)
+            self._sent(n, now)
             self._went(cmd)
         else:
-            self._finish(tx, took)
+            self._finish(took, now)
 
-    def _sent(self, n):
+    def _sent(self, n, now):
         # n more bytes are on their way: the wire is busy until they have left,
         # behind what is on it already (or from now, if it was idle). Kept in
         # ms, which wrap after 12 days (us would after 18 minutes), and us.
-        now = time.ticks_ms()
+        # now is the time before the write: one that waited for room (esp32's
+        # does) has seen its first bytes leave already.
         idle = self._idle
         us = n * self._byte_us
         if (idle - now) & _TICKS < _AHEAD_MS:
@@ -276,30 +292,31 @@ class BusServo:
         self._idle = (idle + us // 1000) & _TICKS
         self._frac = us % 1000
 
-    def _finish(self, buf=None, at=0):
-        # Write the rest of a frame the UART took only part of: buf from at, or
-        # with no buf, the cut one's rest, as the wire makes room for it, up to
-        # a deadline the wire time sets. Past it, raise; if part of the frame
-        # went (_cut_at > 0), the next command sends its rest first, so the
-        # controller never reads a new frame as the tail of a cut one.
-        if buf is None:
-            buf = self._cut
+    def _finish(self, at=-1, now=0):
+        # Write the rest of the frame in tx that the UART took only part of (from
+        # at, its write begun at now; by default, the rest of a cut one) as the
+        # wire makes room for it, up to a deadline the wire time sets. Past it,
+        # raise; if part of the frame went (_cut_at > 0), the next command sends
+        # its rest first, so the controller never reads a new frame as the tail of
+        # a cut one (which is why every command finishes it before it uses tx).
+        buf = self._tx
+        if at == -1:
             at = self._cut_at
         else:
             at = at or 0  # write() returns None when it took nothing
-            self._sent(at)
-            self._cut = buf
+            self._sent(at, now)
         end = buf[2] + 2  # the frame's length, by its Length byte
         deadline = time.ticks_add(
             time.ticks_ms(), self.wire_ms() + (end - at) * self._byte_us // 1000 + _SLACK_MS
         )
         while at < end:
             self._cut_at = at
+            now = time.ticks_ms()
             took = self._write(buf, at, end - at) or 0
             if took:
-                self._sent(took)
+                self._sent(took, now)
                 at += took
-            elif time.ticks_diff(time.ticks_ms(), deadline) >= 0:
+            elif time.ticks_diff(now, deadline) >= 0:
                 raise OSError(errno.EIO, "%d of %d bytes sent" % (at, end))
             else:
                 time.sleep_us(self._byte_us)  # room comes a byte at a time
@@ -343,24 +360,37 @@ class BusServo:
         if self._cut_at:
             self._finish()  # a request cut short goes first: its reply is waited out
         start = time.ticks_add(time.ticks_ms(), self.wire_ms())  # when the wire is free
+        if waiting[kind + 2] and time.ticks_diff(start, waiting[kind + 6]) > _FORGET_MS:
+            waiting[kind + 2] = 0  # given up on long ago: lost, not late
         while True:  # decode what has come first: none of it answers this query
             got = self._next_frame()
             if got is None:
                 # Earlier requests of this kind may still be answered: let their
-                # replies come (as events), for as long as this query would
-                # wait for its own, and a late one, in the worst case.
+                # replies come (as events), for as long as this query would wait
+                # for its own, and a late one, in the worst case. Those a query
+                # gave up on were waited for so already: now only while replies
+                # keep coming (the controller answers in turn, so a burst of
+                # late replies may come).
+                now = time.ticks_ms()
+                waited = time.ticks_diff(now, start)
                 if (
                     not (waiting[kind] or waiting[kind + 2])
-                    or time.ticks_diff(time.ticks_ms(), start) > timeout_ms + _LATE_MS
+                    or waited > timeout_ms + _LATE_MS
+                    or not waiting[kind]
+                    and waited > _GAP_MS
+                    and time.ticks_diff(now, self._heard) > _GAP_MS
                 ):
                     break
                 yield
             self._hold(got)
-        # What has not come by now is given up on. Yet it may come, later still, and
-        # be taken for this query's answer: then this query's own reply comes after
-        # it, and the next query of this kind waits for that one as it did here.
-        waiting[kind + 2] = waiting[kind]
-        waiting[kind] = 0
+        # What has not come by now is given up on (and forgotten _FORGET_MS after
+        # the last such request). Yet it may come, later still: the next queries
+        # wait for it as above, and take no reply for their answer that came before
+        # their request could have been answered (see _apply).
+        if waiting[kind]:
+            waiting[kind + 6] = waiting[kind + 4]  # when the last of them left the wire
+            waiting[kind + 2] += waiting[kind]
+            waiting[kind] = 0
         if kind:
             self.request_positions(ids)  # checks the ids
         else:
@@ -416,6 +446,7 @@ class BusServo:
                     queue[i] = queue[i + 1]
                 return cmd
             rx = self._rx
+            waiting = self._waiting
             budget = _BUDGET
             while True:
                 r = self._r
@@ -430,8 +461,16 @@ class BusServo:
                         length = rx[r + 2]
                         cmd = rx[r + 3]
                         ok = _LENGTHS[cmd] if cmd < 22 else 0
-                        if ok == 3:  # positions: Length 3n + 3, n >= 1 servos (Prm 1)
-                            ok = length > 5 and (have < 5 or length == 3 * rx[r + 4] + 3)
+                        if ok == 3:
+                            # Positions come only in reply, to n >= 1 ids (Prm 1), with
+                            # Length 3n + 3: a request in flight must have asked for n.
+                            ok = (waiting[1] or waiting[3]) and length > 5
+                            if ok and have > 4:
+                                n = rx[r + 4]
+                                ok = (
+                                    length == 3 * n + 3
+                                    and self._asked[85 + (n >> 3)] >> (n & 7) & 1
+                                )
                         else:
                             ok = ok and length == ok
                         if ok and have >= length + 2:
@@ -491,9 +530,16 @@ class BusServo:
         else:  # a reply: the battery, or positions
             waiting = self._waiting
             kind = cmd == CMD_MULT_SERVO_POS_READ  # as in _waiting
-            if kind:  # they answer the request in flight only if they have its ids, in order
+            # It can answer the last request of its kind only if it came once that
+            # request had left the wire and its own bytes had had time to follow. It
+            # came before the read that brought it (_heard), and before the bytes
+            # read behind it, each a byte's time at least (less 10 %: a fast clock).
+            byte_us = self._byte_us
+            came = time.ticks_add(self._heard, -((self._w - self._r) * byte_us // 1100))
+            answers = time.ticks_diff(came, waiting[kind + 4]) >= (rx[f + 2] + 2) * byte_us // 1000
+            if kind:  # and only if they have its ids, in order
                 asked = self._asked
-                answers = asked[0] == rx[f + 4]
+                answers = answers and asked[0] == rx[f + 4]
                 k = 1
                 for i in range(f + 5, f + 5 + 3 * rx[f + 4], 3):
                     # signed 16-bit, as a servo near 0 may say -3
@@ -503,7 +549,6 @@ class BusServo:
                     k += 1
             else:
                 self.battery = rx[f + 4] | rx[f + 5] << 8
-                answers = True
             # It answers the oldest request of its kind in flight (if it does not match
             # that, an older one's, if there is one), or else one a query gave up on.
             if waiting[kind] and (answers or waiting[kind] > 1):

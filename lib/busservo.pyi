@@ -159,11 +159,14 @@ class BusServo:
 
         Replies to earlier requests of its kind (request_battery(), a query that timed out)
         come first, as events: it lets them come, for as long as it would wait for its own
-        reply and 100 ms more, before it asks. A reply later still is taken for this answer;
-        the next query then waits for this one's own reply in the same way. Frames that
-        come in meanwhile are applied to the state at once and returned by the next poll()
-        calls. Raises ValueError or TypeError for a bad timeout_ms (before anything is
-        written), and OSError(EIO) if the UART takes nothing."""
+        reply and 100 ms more, before it asks (for those a query gave up on already, within
+        the last second: while replies keep coming). No reply that came before this request
+        could have been answered (while it was still on the wire, or before the reply's own
+        bytes could follow it) is taken for its answer; a late one that lands just when the
+        answer could is, once. Frames that come in meanwhile are applied to the state at
+        once and returned by the next poll() calls. Raises ValueError or TypeError for a bad
+        timeout_ms (before anything is written), and OSError(EIO) if the UART takes
+        nothing."""
     def read_positions(self, ids: Sequence[int], timeout_ms: int | None = None) -> dict[int, int]:
         """{servo_id: position} for 1..84 servos; positions are signed (a servo near 0 may
         say -3). Raises OSError(ETIMEDOUT) if no reply comes; the default timeout is 100 ms
@@ -188,4 +191,6 @@ class BusServo:
         to the state, or None. Never blocks; one frame per call.
 
         With nothing waiting it costs one uart.any() and little more. It reads what the UART
-        holds (up to about 1 KB a call) before it says None."""
+        holds (up to about 1 KB a call) before it says None. A positions reply comes only
+        to a request: one that no request in flight asked for (none, or not that many ids)
+        is noise."""

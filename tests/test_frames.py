@@ -23,6 +23,7 @@ POSITIONS_ALL_500 = bytes(
     + (0x04, 0xF4, 0x01, 0x05, 0xF4, 0x01, 0x06, 0xF4, 0x01)
 )
 ALL_500 = {1: 500, 2: 500, 3: 500, 4: 500, 5: 500, 6: 500}
+POSITIONS_1_500 = bytes((0x55, 0x55, 0x06, 0x15, 0x01, 0x01, 0xF4, 0x01))
 
 # Made by the same rules: group 2 forever, and the longest frame there is
 # (Length 255): 84 servo positions, servo i at 1000 + i.
@@ -45,9 +46,16 @@ FRAMES = (
 )
 
 
-def fresh(chunks=None):
+def fresh(chunks=None, frames=()):
+    """A fake UART and a BusServo on it, which has asked for the positions each
+    positions reply among frames carries (the controller sends none unasked)."""
     uart = FakeUART(chunks)
-    return uart, busservo.BusServo(uart)
+    bus = busservo.BusServo(uart)
+    for frame in frames:
+        if frame[3] == CMD_MULT_SERVO_POS_READ:
+            bus.request_positions([frame[5 + 3 * i] for i in range(frame[4])])
+    uart.clear()
+    return uart, bus
 
 
 def drain(bus):
@@ -66,7 +74,7 @@ class Frames(unittest.TestCase):
 
     def test_each_frame_is_decoded_and_applied(self):
         for frame, cmd, state in FRAMES:
-            uart, bus = fresh()
+            uart, bus = fresh(frames=[frame])
             self.assertIsNone(bus.poll())
             uart.feed(frame)
             self.assertEqual(bus.poll(), cmd)
@@ -82,7 +90,7 @@ class Frames(unittest.TestCase):
     def test_each_frame_split_at_every_byte(self):
         for frame, cmd, state in FRAMES:
             for cut in range(1, len(frame)):
-                uart, bus = fresh()
+                uart, bus = fresh(frames=[frame])
                 uart.feed(frame[:cut])
                 self.assertIsNone(bus.poll(), "cut at %d" % cut)
                 self.assertEqual(bus.running, False)
@@ -95,7 +103,7 @@ class Frames(unittest.TestCase):
         # poll() reads all the UART holds before it gives up, however it comes.
         for frame, cmd, state in FRAMES:
             for size in (1, 2, 3, 5, 7, 63, 64, 100):
-                uart, bus = fresh([size])
+                uart, bus = fresh([size], [frame])
                 uart.feed(frame)
                 self.assertEqual(bus.poll(), cmd, "chunks of %d" % size)
                 self.assertState(bus, state)
@@ -122,7 +130,7 @@ class Frames(unittest.TestCase):
         expect = [f[1] for f in FRAMES]
         for cut in range(0, len(stream), 7):
             for size in (1, 4, 63):
-                uart, bus = fresh([size])
+                uart, bus = fresh([size], [f[0] for f in FRAMES])
                 uart.feed(stream[:cut])
                 got = drain(bus)
                 uart.feed(stream[cut:])
@@ -148,7 +156,7 @@ class Frames(unittest.TestCase):
     def test_commands_after_reading_behind_a_partial_frame(self):
         # Bytes read behind a partial frame pass through the idle transmit
         # buffer; what is sent next must not carry any of them.
-        uart, bus = fresh([5])
+        uart, bus = fresh([5], [POSITIONS_84])
         uart.feed(b"\x55" * 40 + POSITIONS_84[:100])
         self.assertIsNone(bus.poll())
         bus.stop_group()
@@ -159,7 +167,7 @@ class Frames(unittest.TestCase):
         self.assertEqual(bus.positions[83], 1083)
 
     def test_positions_are_updated_in_place(self):
-        uart, bus = fresh()
+        uart, bus = fresh(frames=[POSITIONS_ALL_500])
         positions = bus.positions
         positions[7] = 123
         uart.feed(POSITIONS_ALL_500)
@@ -170,9 +178,9 @@ class Frames(unittest.TestCase):
 
 
 class Resync(unittest.TestCase):
-    def assertFrames(self, data, expect, state=None):
+    def assertFrames(self, data, expect, state=None, asked=()):
         for size in (1, 3, 64):
-            uart, bus = fresh([size])
+            uart, bus = fresh([size], asked)
             uart.feed(data)
             self.assertEqual(drain(bus), expect, "chunks of %d" % size)
             if state:
@@ -218,7 +226,34 @@ class Resync(unittest.TestCase):
                 bad + RUN_8_ONCE + STOP + BATTERY_7500,
                 [CMD_ACTION_GROUP_RUN, CMD_ACTION_GROUP_STOP, CMD_GET_BATTERY_VOLTAGE],
                 {"battery": 7500, "group": 8},
+                asked=[POSITIONS_1_500, POSITIONS_ALL_500],  # so the Length is what tells
             )
+
+    def test_positions_nobody_asked_for_are_noise(self):
+        # The controller sends positions only in reply. Unasked, 55 55 FF 15 54 (84
+        # servos) would hold the frames behind it until 252 bytes had come, and eat them.
+        for unasked, asked in (
+            (POSITIONS_ALL_500, ()),
+            (POSITIONS_84[:5], ()),
+            (POSITIONS_84[:4], ()),
+            (POSITIONS_ALL_500, [POSITIONS_1_500]),  # a count that no request asked for
+            (POSITIONS_84[:5], [POSITIONS_1_500, POSITIONS_ALL_500]),
+        ):
+            self.assertFrames(
+                unasked + RUN_8_ONCE + STOP * 70,
+                [CMD_ACTION_GROUP_RUN] + [CMD_ACTION_GROUP_STOP] * 70,
+                {"noise": len(unasked), "positions": {}},
+                asked,
+            )
+
+    def test_a_reply_to_any_request_in_flight_is_a_frame(self):
+        # Two requests in flight, for 1 and for 6 servos: either reply is a frame.
+        self.assertFrames(
+            POSITIONS_ALL_500 + POSITIONS_1_500,
+            [CMD_MULT_SERVO_POS_READ] * 2,
+            {"noise": 0, "positions": ALL_500},
+            [POSITIONS_1_500, POSITIONS_ALL_500],
+        )
 
     def test_a_rejected_frame_can_hide_the_next_header(self):
         # 55 55 05 07 is no STOP; the 55 55 02 07 inside it is.
