@@ -23,8 +23,9 @@
 # with each request (Authorization: Bearer). Bad input gets a 4xx naming what was
 # wrong and moves nothing. A connection has _HEAD_MS to send its request, of at
 # most _REQUEST bytes (a body of at most _BODY, else 413); connections that say
-# nothing are pushed out by new ones; at most _CLIENTS are answered at once (more
-# get 503), but a logged-in page is (up to twice as many): its STOP gets through.
+# nothing, then those slow to say it, are pushed out by new ones; at most _CLIENTS
+# are answered at once (more get 503), but a logged-in page is (up to twice as
+# many): its STOP gets through.
 # Sequences are saved under sequences/ by a name of letters, digits, - and _.
 # Plain HTTP: anyone who can watch the Wi-Fi can read the password. Use a
 # network you trust, or the board's own access point with a WPA2 key.
@@ -130,6 +131,18 @@ def _error(status, why):
     return Response({"error": why}, status, reason=_REASONS.get(status))
 
 
+# Answers made beforehand, whole: sent where making one could fail (no memory left), or
+# would cost RAM for a connection that is let go (pushed out, or too slow).
+_BUSY = (
+    b"HTTP/1.0 503 Service Unavailable\r\nContent-Type: application/json\r\n"
+    b'Content-Length: 29\r\n\r\n{"error": "too many clients"}'
+)
+_LATE = (
+    b"HTTP/1.0 408 Request Timeout\r\nContent-Type: application/json\r\n"
+    b'Content-Length: 38\r\n\r\n{"error": "the request took over 1 s"}'
+)
+
+
 def _guard(handler):
     # A route's handler, whose refusals and errors become a 4xx or 5xx with
     # {"error": why}: nothing is half done, and the server goes on.
@@ -206,10 +219,10 @@ class _Reader:
 class _App(Microdot):
     # Microdot, with limits on its connections: a board has few sockets and
     # little RAM, and the STOP button must get through whatever else comes.
-    # - A request must be in within _HEAD_MS. When _CLIENTS connections are still
-    #   reading theirs, a new one pushes out the oldest that has sent nothing yet
-    #   (if they all have, the new one is closed). So connections that say nothing
-    #   hold nothing, and a page's request, sent at once, gets in.
+    # - A request must be in within _HEAD_MS (else 408). When _CLIENTS connections
+    #   are still reading theirs, a new one pushes out the oldest that has sent
+    #   nothing yet, else the oldest (which hears 503). So connections that say
+    #   nothing, or little, hold nothing, and a page's request, sent at once, gets in.
     # - At most _CLIENTS requests are answered at once, each within _CLIENT_MS;
     #   more get 503, except a logged-in page's (up to twice as many).
     def __init__(self, logged_in):
@@ -222,14 +235,12 @@ class _App(Microdot):
     async def handle_request(self, reader, writer):
         reading = self._reading
         if len(reading) >= _CLIENTS:
-            for i, (task, other) in enumerate(reading):
-                if not other.heard:
-                    reading.pop(i)
-                    task.cancel()
+            out = 0
+            for i in range(len(reading)):
+                if not reading[i][1].heard:
+                    out = i
                     break
-            else:
-                await _close(writer)
-                return
+            reading.pop(out)[0].cancel()
         mine = (asyncio.current_task(), _Reader(reader))
         reading.append(mine)
         request = None
@@ -238,8 +249,14 @@ class _App(Microdot):
                 Request.create(self, mine[1], writer, writer.get_extra_info("peername")),
                 _HEAD_MS,
             )
-        except (asyncio.TimeoutError, asyncio.CancelledError, OSError):
-            await _close(writer)  # too slow, pushed out, or gone
+        except asyncio.TimeoutError:  # too slow: told so, if it said anything
+            await _answer(_LATE if mine[1].heard else None, writer)
+            return
+        except asyncio.CancelledError:  # pushed out by a newer connection
+            await _answer(_BUSY if mine[1].heard else None, writer)
+            return
+        except OSError:
+            await _close(writer)  # gone
             return
         except Exception:  # malformed or too long: Microdot answers None with 400
             pass
@@ -249,7 +266,7 @@ class _App(Microdot):
         if self.clients >= _CLIENTS and (
             self.clients >= 2 * _CLIENTS or not self._logged_in(request)
         ):
-            await _answer(_error(503, "too many clients"), writer)
+            await _answer(_BUSY, writer)
             return
         self.clients += 1
         try:
@@ -262,8 +279,11 @@ class _App(Microdot):
 
 
 async def _answer(response, writer):
+    # response: a Response, an answer made beforehand (bytes), or None (close only).
     try:
-        if response != Response.already_handled:
+        if type(response) is bytes:
+            await writer.awrite(response)
+        elif response is not None and response != Response.already_handled:
             await response.write(writer)
     except OSError:
         pass  # the client has gone

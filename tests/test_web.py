@@ -634,3 +634,79 @@ def _init(self, *args):
 
 
 busservo_web.Panel.__init__ = _init
+
+
+class AlwaysAnswers(Tidy):
+    # However it is crowded, every connection ends with a status or a clean close within
+    # its second, and the server goes on.
+    HALF = (
+        b"GET /api/state HTTP/1.0\r\nHost: 127.0.0.1\r\n",  # the head, no blank line
+        b"",  # nothing at all
+        b"GET /api/st",  # part of the request line
+        b'POST /api/login HTTP/1.0\r\nContent-Length: 100\r\n\r\n{"pass',  # a body promised
+    )
+    # The request's second, and a margin for one event loop that runs the panel, its
+    # controller and 25 clients on a shared machine (timers fire late by a loop's pass).
+    DUE_MS = busservo_web._HEAD_MS + 250
+
+    def test_the_answers_made_beforehand_are_whole(self):
+        # What a connection pushed out or too slow hears: written by hand, checked here.
+        import json
+
+        for answer, status, why in (
+            (busservo_web._BUSY, b"503 Service Unavailable", "too many clients"),
+            (busservo_web._LATE, b"408 Request Timeout", "the request took over 1 s"),
+        ):
+            head, _, body = answer.partition(b"\r\n\r\n")
+            lines = head.split(b"\r\n")
+            self.assertEqual(lines[0], b"HTTP/1.0 " + status)
+            self.assertIn(b"Content-Length: %d" % len(body), lines)
+            self.assertIn(why, json.loads(body)["error"])
+        self.assertEqual(busservo_web._HEAD_MS, 1000)  # "over 1 s"
+
+    def test_24_half_sent_requests_hold_nothing_and_a_new_request_is_answered(self):
+        async def scenario(port, world, robot):
+            token = await login(port)
+            state = b"GET /api/state HTTP/1.0\r\nAuthorization: Bearer %s\r\n\r\n" % token.encode()
+            for r in range(16):
+                half = self.HALF[r % 4]
+                gap = (0, 1, 3, 10)[r // 4]  # ms between the 24's connections
+                late = (0, 300, 600, 950)[(r + r // 4) % 4]  # ms before the new client
+                crowd = []
+                for _ in range(24):
+                    reader, writer = await asyncio.open_connection("127.0.0.1", port)
+                    crowd.append(asyncio.create_task(answered(reader, writer, half)))
+                    await asyncio.sleep_ms(gap)
+                await asyncio.sleep_ms(late)
+                case = (half, gap, late)
+                start = time.ticks_ms()
+                reader, writer = await asyncio.open_connection("127.0.0.1", port)
+                line, ms = await answered(reader, writer, state, start)
+                self.assertEqual(line, b"HTTP/1.0 200 OK\r\n", case)  # not even 503
+                self.assertTrue(ms <= self.DUE_MS, (case, ms))
+                for task in crowd:  # each: a status, or closed having said nothing
+                    line, ms = await task
+                    said = half != b""
+                    self.assertTrue(line[:9] == b"HTTP/1.0 " or line == b"" and not said, case)
+                    self.assertTrue(ms <= self.DUE_MS, (case, line, ms))
+            status, _ = await http(port, "GET", "/api/state", token=token)
+            self.assertEqual(status, 200)
+
+        run(scenario)
+
+
+async def answered(reader, writer, raw, start=None):
+    """Send raw, then wait for the answer's first line: (the line, b"" if closed without
+    one; ms from start, or from now)."""
+    start = time.ticks_ms() if start is None else start
+    try:
+        if raw:
+            await writer.awrite(raw)
+        line = await asyncio.wait_for_ms(reader.readline(), 2000)
+    except asyncio.TimeoutError:
+        line = b"(no answer)"
+    except OSError:
+        line = b"(reset)"
+    ms = time.ticks_diff(time.ticks_ms(), start)
+    await writer.aclose()
+    return line, ms
