@@ -25,7 +25,8 @@
 # most _REQUEST bytes (a body of at most _BODY, else 413); connections that say
 # nothing, then those slow to say it, are pushed out by new ones; at most _CLIENTS
 # are answered at once (more get 503), but a logged-in page is (up to twice as
-# many): its STOP gets through.
+# many): its STOP gets through. Whatever fails (the RAM, say), the connection is
+# closed, with a 503 if its answer had not begun, and the server goes on.
 # Sequences are saved under sequences/ by a name of letters, digits, - and _.
 # Plain HTTP: anyone who can watch the Wi-Fi can read the password. Use a
 # network you trust, or the board's own access point with a WPA2 key.
@@ -141,6 +142,10 @@ _LATE = (
     b"HTTP/1.0 408 Request Timeout\r\nContent-Type: application/json\r\n"
     b'Content-Length: 38\r\n\r\n{"error": "the request took over 1 s"}'
 )
+_FAILED = (
+    b"HTTP/1.0 503 Service Unavailable\r\nContent-Type: application/json\r\nContent-Length: 67"
+    b'\r\n\r\n{"error": "the panel could not answer (out of memory?): try again"}'
+)
 
 
 def _guard(handler):
@@ -173,15 +178,19 @@ def _name(body):
     return _FOLDER + "/" + name + ".json"
 
 
-class _Reader:
-    # A connection's reader, for Microdot: it gives a request at most _REQUEST
+class _Conn:
+    # A connection, as Microdot reads and writes it. It gives a request at most _REQUEST
     # bytes (MicroPython's readline() has no limit of its own, and a negative
-    # Content-Length would read until the RAM is full), then ValueError: a 400.
-    def __init__(self, reader):
+    # Content-Length would read until the RAM is full), then ValueError: a 400. It notes
+    # whether a byte came (a client that said something is told why it is closed) and
+    # whether a write went out (until then a failure can still be answered 503).
+    def __init__(self, reader, writer):
         self._reader = reader
+        self._writer = writer
         self._buf = b""
         self._left = _REQUEST
         self.heard = False  # a byte has come
+        self.sent = False  # a write has gone out whole: the status line first
 
     async def _more(self):
         data = await self._reader.read(256)
@@ -215,6 +224,10 @@ class _Reader:
             return data
         return await self._reader.read(n)
 
+    async def awrite(self, data):
+        await self._writer.awrite(data)
+        self.sent = True
+
 
 class _App(Microdot):
     # Microdot, with limits on its connections: a board has few sockets and
@@ -225,75 +238,78 @@ class _App(Microdot):
     #   nothing, or little, hold nothing, and a page's request, sent at once, gets in.
     # - At most _CLIENTS requests are answered at once, each within _CLIENT_MS;
     #   more get 503, except a logged-in page's (up to twice as many).
+    # - Every connection is answered and closed, whatever fails: a MemoryError before
+    #   the answer has begun is answered 503, after it the connection is closed, and
+    #   the server goes on.
     def __init__(self, logged_in):
         super().__init__()
         self.options_handler = None  # OPTIONS too needs the password (a route below)
         self._logged_in = logged_in  # request -> True if it comes with a session
-        self._reading = []  # (task, _Reader) of the requests being read, oldest first
+        self._reading = []  # (task, _Conn) of the requests being read, oldest first
         self.clients = 0  # requests being answered
 
     async def handle_request(self, reader, writer):
-        reading = self._reading
-        if len(reading) >= _CLIENTS:
-            out = 0
-            for i in range(len(reading)):
-                if not reading[i][1].heard:
-                    out = i
-                    break
-            reading.pop(out)[0].cancel()
-        mine = (asyncio.current_task(), _Reader(reader))
-        reading.append(mine)
-        request = None
+        conn = None
         try:
-            request = await asyncio.wait_for_ms(
-                Request.create(self, mine[1], writer, writer.get_extra_info("peername")),
-                _HEAD_MS,
-            )
-        except asyncio.TimeoutError:  # too slow: told so, if it said anything
-            await _answer(_LATE if mine[1].heard else None, writer)
-            return
-        except asyncio.CancelledError:  # pushed out by a newer connection
-            await _answer(_BUSY if mine[1].heard else None, writer)
-            return
+            conn = _Conn(reader, writer)
+            reading = self._reading
+            if len(reading) >= _CLIENTS:
+                out = 0
+                for i in range(len(reading)):
+                    if not reading[i][1].heard:
+                        out = i
+                        break
+                reading.pop(out)[0].cancel()
+            mine = (asyncio.current_task(), conn)
+            reading.append(mine)
+            try:
+                request = await asyncio.wait_for_ms(
+                    Request.create(self, conn, conn, writer.get_extra_info("peername")),
+                    _HEAD_MS,
+                )
+            except asyncio.TimeoutError:
+                if conn.heard:
+                    await conn.awrite(_LATE)
+                return
+            except asyncio.CancelledError:  # pushed out by a newer connection
+                if conn.heard:
+                    await conn.awrite(_BUSY)
+                return
+            except (OSError, MemoryError):
+                raise
+            except Exception:  # malformed or too long: Microdot answers None with 400
+                request = None
+            finally:
+                if mine in reading:
+                    reading.remove(mine)
+            if self.clients >= _CLIENTS and (
+                self.clients >= 2 * _CLIENTS or not self._logged_in(request)
+            ):
+                await conn.awrite(_BUSY)
+                return
+            self.clients += 1
+            try:
+                response = await asyncio.wait_for_ms(self.dispatch_request(request), _CLIENT_MS)
+                if response is not Response.already_handled:
+                    await asyncio.wait_for_ms(response.write(conn), _CLIENT_MS)
+            finally:
+                self.clients -= 1
         except OSError:
-            await _close(writer)  # gone
-            return
-        except Exception:  # malformed or too long: Microdot answers None with 400
-            pass
+            pass  # the client has gone
+        except Exception:  # out of memory, say, or an answer over _CLIENT_MS
+            if not (conn and conn.sent):
+                try:
+                    await writer.awrite(_FAILED)
+                except Exception:
+                    pass
         finally:
-            if mine in reading:
-                reading.remove(mine)
-        if self.clients >= _CLIENTS and (
-            self.clients >= 2 * _CLIENTS or not self._logged_in(request)
-        ):
-            await _answer(_BUSY, writer)
-            return
-        self.clients += 1
-        try:
-            response = await asyncio.wait_for_ms(self.dispatch_request(request), _CLIENT_MS)
-            await asyncio.wait_for_ms(_answer(response, writer), _CLIENT_MS)
-        except asyncio.TimeoutError:
             await _close(writer)
-        finally:
-            self.clients -= 1
-
-
-async def _answer(response, writer):
-    # response: a Response, an answer made beforehand (bytes), or None (close only).
-    try:
-        if type(response) is bytes:
-            await writer.awrite(response)
-        elif response is not None and response != Response.already_handled:
-            await response.write(writer)
-    except OSError:
-        pass  # the client has gone
-    await _close(writer)
 
 
 async def _close(writer):
     try:
         await writer.aclose()
-    except OSError:
+    except Exception:
         pass
 
 
@@ -509,6 +525,12 @@ class Panel:
         @app.errorhandler(400)
         async def bad(request):
             return refuse(400, "bad request")
+
+        @app.errorhandler(MemoryError)
+        async def no_memory(request, e):
+            # Written here (Microdot then writes nothing): making an answer could fail too.
+            await request.sock[1].awrite(_FAILED)
+            return Response.already_handled
 
         @app.route("/")
         @_guard

@@ -637,8 +637,8 @@ busservo_web.Panel.__init__ = _init
 
 
 class AlwaysAnswers(Tidy):
-    # However it is crowded, every connection ends with a status or a clean close within
-    # its second, and the server goes on.
+    # However it is crowded and whatever fails, every connection ends with a status or
+    # a clean close within its second, and the server goes on.
     HALF = (
         b"GET /api/state HTTP/1.0\r\nHost: 127.0.0.1\r\n",  # the head, no blank line
         b"",  # nothing at all
@@ -650,12 +650,13 @@ class AlwaysAnswers(Tidy):
     DUE_MS = busservo_web._HEAD_MS + 250
 
     def test_the_answers_made_beforehand_are_whole(self):
-        # What a connection pushed out or too slow hears: written by hand, checked here.
+        # What a connection pushed out, too slow, or failed hears: written by hand, checked here.
         import json
 
         for answer, status, why in (
             (busservo_web._BUSY, b"503 Service Unavailable", "too many clients"),
             (busservo_web._LATE, b"408 Request Timeout", "the request took over 1 s"),
+            (busservo_web._FAILED, b"503 Service Unavailable", "out of memory?"),
         ):
             head, _, body = answer.partition(b"\r\n\r\n")
             lines = head.split(b"\r\n")
@@ -693,6 +694,99 @@ class AlwaysAnswers(Tidy):
             self.assertEqual(status, 200)
 
         run(scenario)
+
+    def test_out_of_memory_in_a_route_gets_503_and_the_server_goes_on(self):
+        async def scenario(port, world, robot):
+            token = await login(port)
+            panel = _panels[-1]
+
+            def state(token=None):
+                raise MemoryError
+
+            panel.state = state
+            status, reply = await http(port, "GET", "/api/state", token=token)
+            self.assertEqual(status, 503, reply)
+            self.assertIn("try again", reply["error"])
+            del panel.state
+            status, _ = await http(port, "GET", "/api/state", token=token)
+            self.assertEqual(status, 200)
+
+        run(scenario)
+
+    def test_a_failure_before_the_status_gets_503_after_it_a_close_and_the_server_goes_on(self):
+        page = b"GET / HTTP/1.0\r\n\r\n"
+
+        async def scenario(port, world, robot):
+            app = _panels[-1].app
+            serve = app.handle_request
+            # (what fails, at which of the connection's reads or writes, what the client gets)
+            for error, reads, writes, want in (
+                (MemoryError, 1, 0, b"HTTP/1.0 503 "),  # reading the request
+                (MemoryError, 0, 1, b"HTTP/1.0 503 "),  # writing the status line
+                (RuntimeError, 0, 1, b"HTTP/1.0 503 "),  # any error
+                (MemoryError, 0, 8, b"HTTP/1.0 200 OK\r\n"),  # the page half sent
+            ):
+                case = (error, reads, writes)
+                app.handle_request = failing(serve, error, reads, writes)
+                reader, writer = await asyncio.open_connection("127.0.0.1", port)
+                await writer.awrite(page)
+                reply, end = b"", "closed"
+                try:
+                    while True:  # by lines: a read() loses what it had if a reset follows
+                        part = await asyncio.wait_for_ms(reader.readline(), 2000)
+                        if not part:
+                            break
+                        reply += part
+                except asyncio.TimeoutError:
+                    end = "left open"
+                except OSError:  # reset: the request was left unread (a failed read)
+                    pass
+                await writer.aclose()
+                self.assertEqual((reply[: len(want)], end), (want, "closed"), (case, reply))
+                app.handle_request = serve
+                status, _ = await http(port, "GET", "/")
+                self.assertEqual(status, 200, case)
+
+        run(scenario)
+
+
+def failing(serve, error, reads, writes):
+    """serve (an app's handle_request) with a connection whose reads-th read, or writes-th
+    write, raises error."""
+
+    def handle_request(reader, writer):
+        stream = Failing(writer, error, reads, writes)  # reader and writer: one stream
+        return serve(stream, stream)
+
+    return handle_request
+
+
+class Failing:
+    """A connection's stream whose reads-th read, or writes-th write, raises error."""
+
+    def __init__(self, stream, error, reads, writes):
+        self.stream = stream
+        self.error = error
+        self.reads = reads
+        self.writes = writes
+
+    async def read(self, n=-1):
+        self.reads -= 1
+        if self.reads == 0:
+            raise self.error("injected")
+        return await self.stream.read(n)
+
+    async def awrite(self, data):
+        self.writes -= 1
+        if self.writes == 0:
+            raise self.error("injected")
+        await self.stream.awrite(data)
+
+    def get_extra_info(self, name):
+        return self.stream.get_extra_info(name)
+
+    async def aclose(self):
+        await self.stream.aclose()
 
 
 async def answered(reader, writer, raw, start=None):
