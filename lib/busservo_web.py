@@ -238,9 +238,8 @@ class _App(Microdot):
     #   nothing, or little, hold nothing, and a page's request, sent at once, gets in.
     # - At most _CLIENTS requests are answered at once, each within _CLIENT_MS;
     #   more get 503, except a logged-in page's (up to twice as many).
-    # - Every connection is answered and closed, whatever fails: a MemoryError before
-    #   the answer has begun is answered 503, after it the connection is closed, and
-    #   the server goes on.
+    # - Every connection ends closed, whatever is raised: an error (a MemoryError,
+    #   say) before its answer has begun is answered 503; after, the answer is cut.
     def __init__(self, logged_in):
         super().__init__()
         self.options_handler = None  # OPTIONS too needs the password (a route below)
@@ -254,6 +253,8 @@ class _App(Microdot):
             conn = _Conn(reader, writer)
             reading = self._reading
             if len(reading) >= _CLIENTS:
+                # A request sent whole is read within a few ms: the ones still reading
+                # when more come are the silent, then the slow.
                 out = 0
                 for i in range(len(reading)):
                     if not reading[i][1].heard:
@@ -276,7 +277,7 @@ class _App(Microdot):
                     await conn.awrite(_BUSY)
                 return
             except (OSError, MemoryError):
-                raise
+                raise  # gone, or out of memory: below
             except Exception:  # malformed or too long: Microdot answers None with 400
                 request = None
             finally:
