@@ -23,8 +23,10 @@
 # with each request (Authorization: Bearer). Bad input gets a 4xx naming what was
 # wrong and moves nothing. A connection has _HEAD_MS to send its request, of at
 # most _REQUEST bytes (a body of at most _BODY, else 413); connections that say
-# nothing are pushed out by new ones; at most _CLIENTS are answered at once (more
-# get 503), but a logged-in page is (up to twice as many): its STOP gets through.
+# nothing, then those slow to say it, are pushed out by new ones; at most _CLIENTS
+# are answered at once (more get 503), but a logged-in page is (up to twice as
+# many): its STOP gets through. Whatever fails (the RAM, say), the connection is
+# closed, with a 503 if its answer had not begun, and the server goes on.
 # Sequences are saved under sequences/ by a name of letters, digits, - and _.
 # Plain HTTP: anyone who can watch the Wi-Fi can read the password. Use a
 # network you trust, or the board's own access point with a WPA2 key.
@@ -130,6 +132,22 @@ def _error(status, why):
     return Response({"error": why}, status, reason=_REASONS.get(status))
 
 
+# Answers made beforehand, whole: sent where making one could fail (no memory left), or
+# would cost RAM for a connection that is let go (pushed out, or too slow).
+_BUSY = (
+    b"HTTP/1.0 503 Service Unavailable\r\nContent-Type: application/json\r\n"
+    b'Content-Length: 29\r\n\r\n{"error": "too many clients"}'
+)
+_LATE = (
+    b"HTTP/1.0 408 Request Timeout\r\nContent-Type: application/json\r\n"
+    b'Content-Length: 38\r\n\r\n{"error": "the request took over 1 s"}'
+)
+_FAILED = (
+    b"HTTP/1.0 503 Service Unavailable\r\nContent-Type: application/json\r\nContent-Length: 67"
+    b'\r\n\r\n{"error": "the panel could not answer (out of memory?): try again"}'
+)
+
+
 def _guard(handler):
     # A route's handler, whose refusals and errors become a 4xx or 5xx with
     # {"error": why}: nothing is half done, and the server goes on.
@@ -160,15 +178,19 @@ def _name(body):
     return _FOLDER + "/" + name + ".json"
 
 
-class _Reader:
-    # A connection's reader, for Microdot: it gives a request at most _REQUEST
+class _Conn:
+    # A connection, as Microdot reads and writes it. It gives a request at most _REQUEST
     # bytes (MicroPython's readline() has no limit of its own, and a negative
-    # Content-Length would read until the RAM is full), then ValueError: a 400.
-    def __init__(self, reader):
+    # Content-Length would read until the RAM is full), then ValueError: a 400. It notes
+    # whether a byte came (a client that said something is told why it is closed) and
+    # whether a write went out (until then a failure can still be answered 503).
+    def __init__(self, reader, writer):
         self._reader = reader
+        self._writer = writer
         self._buf = b""
         self._left = _REQUEST
         self.heard = False  # a byte has come
+        self.sent = False  # a write has gone out whole: the status line first
 
     async def _more(self):
         data = await self._reader.read(256)
@@ -202,78 +224,93 @@ class _Reader:
             return data
         return await self._reader.read(n)
 
+    async def awrite(self, data):
+        await self._writer.awrite(data)
+        self.sent = True
+
 
 class _App(Microdot):
     # Microdot, with limits on its connections: a board has few sockets and
     # little RAM, and the STOP button must get through whatever else comes.
-    # - A request must be in within _HEAD_MS. When _CLIENTS connections are still
-    #   reading theirs, a new one pushes out the oldest that has sent nothing yet
-    #   (if they all have, the new one is closed). So connections that say nothing
-    #   hold nothing, and a page's request, sent at once, gets in.
+    # - A request must be in within _HEAD_MS (else 408). When _CLIENTS connections
+    #   are still reading theirs, a new one pushes out the oldest that has sent
+    #   nothing yet, else the oldest (which hears 503). So connections that say
+    #   nothing, or little, hold nothing, and a page's request, sent at once, gets in.
     # - At most _CLIENTS requests are answered at once, each within _CLIENT_MS;
     #   more get 503, except a logged-in page's (up to twice as many).
+    # - Every connection ends closed, whatever is raised: an error (a MemoryError,
+    #   say) before its answer has begun is answered 503; after, the answer is cut.
     def __init__(self, logged_in):
         super().__init__()
         self.options_handler = None  # OPTIONS too needs the password (a route below)
         self._logged_in = logged_in  # request -> True if it comes with a session
-        self._reading = []  # (task, _Reader) of the requests being read, oldest first
+        self._reading = []  # (task, _Conn) of the requests being read, oldest first
         self.clients = 0  # requests being answered
 
     async def handle_request(self, reader, writer):
-        reading = self._reading
-        if len(reading) >= _CLIENTS:
-            for i, (task, other) in enumerate(reading):
-                if not other.heard:
-                    reading.pop(i)
-                    task.cancel()
-                    break
-            else:
-                await _close(writer)
+        conn = None
+        try:
+            conn = _Conn(reader, writer)
+            reading = self._reading
+            if len(reading) >= _CLIENTS:
+                # A request sent whole is read within a few ms: the ones still reading
+                # when more come are the silent, then the slow.
+                out = 0
+                for i in range(len(reading)):
+                    if not reading[i][1].heard:
+                        out = i
+                        break
+                reading.pop(out)[0].cancel()
+            mine = (asyncio.current_task(), conn)
+            reading.append(mine)
+            try:
+                request = await asyncio.wait_for_ms(
+                    Request.create(self, conn, conn, writer.get_extra_info("peername")),
+                    _HEAD_MS,
+                )
+            except asyncio.TimeoutError:
+                if conn.heard:
+                    await conn.awrite(_LATE)
                 return
-        mine = (asyncio.current_task(), _Reader(reader))
-        reading.append(mine)
-        request = None
-        try:
-            request = await asyncio.wait_for_ms(
-                Request.create(self, mine[1], writer, writer.get_extra_info("peername")),
-                _HEAD_MS,
-            )
-        except (asyncio.TimeoutError, asyncio.CancelledError, OSError):
-            await _close(writer)  # too slow, pushed out, or gone
-            return
-        except Exception:  # malformed or too long: Microdot answers None with 400
-            pass
+            except asyncio.CancelledError:  # pushed out by a newer connection
+                if conn.heard:
+                    await conn.awrite(_BUSY)
+                return
+            except (OSError, MemoryError):
+                raise  # gone, or out of memory: below
+            except Exception:  # malformed or too long: Microdot answers None with 400
+                request = None
+            finally:
+                if mine in reading:
+                    reading.remove(mine)
+            if self.clients >= _CLIENTS and (
+                self.clients >= 2 * _CLIENTS or not self._logged_in(request)
+            ):
+                await conn.awrite(_BUSY)
+                return
+            self.clients += 1
+            try:
+                response = await asyncio.wait_for_ms(self.dispatch_request(request), _CLIENT_MS)
+                if response is not Response.already_handled:
+                    await asyncio.wait_for_ms(response.write(conn), _CLIENT_MS)
+            finally:
+                self.clients -= 1
+        except OSError:
+            pass  # the client has gone
+        except Exception:  # out of memory, say, or an answer over _CLIENT_MS
+            if not (conn and conn.sent):
+                try:
+                    await writer.awrite(_FAILED)
+                except Exception:
+                    pass
         finally:
-            if mine in reading:
-                reading.remove(mine)
-        if self.clients >= _CLIENTS and (
-            self.clients >= 2 * _CLIENTS or not self._logged_in(request)
-        ):
-            await _answer(_error(503, "too many clients"), writer)
-            return
-        self.clients += 1
-        try:
-            response = await asyncio.wait_for_ms(self.dispatch_request(request), _CLIENT_MS)
-            await asyncio.wait_for_ms(_answer(response, writer), _CLIENT_MS)
-        except asyncio.TimeoutError:
             await _close(writer)
-        finally:
-            self.clients -= 1
-
-
-async def _answer(response, writer):
-    try:
-        if response != Response.already_handled:
-            await response.write(writer)
-    except OSError:
-        pass  # the client has gone
-    await _close(writer)
 
 
 async def _close(writer):
     try:
         await writer.aclose()
-    except OSError:
+    except Exception:
         pass
 
 
@@ -489,6 +526,12 @@ class Panel:
         @app.errorhandler(400)
         async def bad(request):
             return refuse(400, "bad request")
+
+        @app.errorhandler(MemoryError)
+        async def no_memory(request, e):
+            # Written here (Microdot then writes nothing): making an answer could fail too.
+            await request.sock[1].awrite(_FAILED)
+            return Response.already_handled
 
         @app.route("/")
         @_guard

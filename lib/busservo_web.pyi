@@ -11,7 +11,9 @@ a sequence to add poses to, play (loop, speed), save and load, and a STOP button
 lets every joint go limp. Nothing moves until the page is armed; when the armed page goes
 silent for a second (tab closed, Wi-Fi gone), the stream stops and the joints hold, and a
 sequence stops where the joints are.
-Without the password only the page is served; every other request gets 401.
+Without the password only the page is served; every other request gets 401. Every request
+is answered, or its connection closed: 503 when too many come at once or the panel fails (out
+of memory, say) before its answer has begun; 408 when it takes over a second to send.
 """
 
 from typing import Any
