@@ -35,6 +35,12 @@ def uart(path, baudrate=9600):
 
 class SerialUART:
     def __init__(self, path, baudrate=9600):
+        # A path, never a number: open(0) is this process's own terminal (stdin), which a
+        # board's UART(0) habit would put in raw mode.
+        if type(path) is not str:
+            raise TypeError(
+                "uart() wants the serial device's path, such as '/dev/ttyUSB0', got %r" % (path,)
+            )
         if baudrate not in _BAUDRATES:
             raise ValueError("baudrate must be one of %s, got %r" % (sorted(_BAUDRATES), baudrate))
         self.path = path

@@ -1,8 +1,10 @@
 # Moves nothing: asks the controller for its battery voltage and, if it stays silent, says why.
 # Run it first, once the wires are on: a working link answers in about 10.4 ms (10 bytes of
-# wire at 9600 baud: the 4-byte question and the 6-byte answer).
+# wire at 9600 baud: the 4-byte question and the 6-byte answer). It ends with exit status 1
+# when the controller (or a servo it reads) does not answer, so a script can use it.
 #   mpremote run examples/check_wiring.py
 import errno
+import sys
 import time
 
 import busservo
@@ -43,12 +45,18 @@ except OSError as e:
         raise
 took = time.ticks_diff(time.ticks_us(), start)
 
+works = mv is not None
 if mv is not None:
     print("battery: %.2f V" % (mv / 1000))
     print("round trip: %.1f ms (about 10.4 ms on a wire at 9600 baud)" % (took / 1000))
     print("noise: %d bytes that were no frame" % bus.noise)
     if READ_SERVOS:
-        print("positions:", sorted(bus.read_positions(range(1, READ_SERVOS + 1)).items()))
+        read = bus.read_positions(range(1, READ_SERVOS + 1))
+        print("positions:", sorted(read.items()))
+        silent = [i for i in sorted(read) if read[i] is None]
+        if silent:
+            print("servos %s do not answer: their power, the bus cable, their ids" % silent)
+            works = False
 else:
     print("no answer from the controller within 100 ms. The likely causes, in order:")
     for n, (cause, check) in enumerate(CAUSES, 1):
@@ -56,3 +64,5 @@ else:
 if bus.noise:
     print("%d bytes came that made no frame: something talks, but garbled." % bus.noise)
     print("That points to the baud rate (9600 8N1), the logic level, or the ground.")
+if not works:
+    sys.exit(1)  # for a script or a CI: the link does not work yet

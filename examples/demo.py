@@ -36,6 +36,9 @@ def say(text):
 def show(positions):
     for servo_id in sorted(positions):
         position = positions[servo_id]
+        if position is None:
+            print("             servo %d does not answer" % servo_id)
+            continue
         filled = min(max(position, 0), 1000) // 50  # 0..1000 in 20 steps
         print(
             "             servo %d %s%s %4d"
@@ -69,12 +72,17 @@ def main():
     say("talking to %s" % port)
     bus = busservo.BusServo(port)
     say("battery: %.2f V" % (bus.read_battery() / 1000))
-    here = bus.read_positions(SERVOS)
+    read = bus.read_positions(SERVOS)
     say("the servos are at:")
-    show(here)
+    show(read)
+    # Only the servos that answer move (None: unpowered, or not on the bus).
+    here = {i: p for i, p in read.items() if p is not None}
+    if not here:
+        say("no servo answers: check the servos' power and the bus cable")
+        return
     # 100 toward the middle (down, from 500 on): never toward an end of the range (0..1000).
-    nudged = {i: here[i] + 100 if here[i] < 500 else here[i] - 100 for i in SERVOS}
-    back = {i: max(here[i], 0) for i in SERVOS}  # a servo at 0 may read -3
+    nudged = {i: p + 100 if p < 500 else p - 100 for i, p in here.items()}
+    back = {i: max(p, 0) for i, p in here.items()}  # a servo at 0 may read -3
     say(
         "this moves each by 100, toward 500 (down from 500 on), over 2 s, back over 2 s, "
         "then runs group %d" % GROUP

@@ -78,9 +78,10 @@ class BusServo:
         self._uart = uart
         self._write = uart.write  # one lookup, not two, per command
         self._any = uart.any
-        # The wire: a byte is 10 bits (8N1). _idle (ticks_ms) and _frac (us) say when what was
-        # written will have left it.
-        self._byte_us = (10000000 + baudrate - 1) // baudrate
+        # The wire: a byte is 10 bits (8N1), 10000 / baudrate ms. _idle (ticks_ms) and _frac
+        # (in 1/baudrate ms, so a byte is 10000 of them: exact) say when what was written
+        # will have left it.
+        self._baud = baudrate
         self._idle = time.ticks_ms()
         self._frac = 0
         self._cut_at = 0  # bytes of it sent (0: nothing is cut)
@@ -140,12 +141,12 @@ class BusServo:
         if took != 10:
             self._finish(took, servo_id)
         else:  # the usual case: the UART took it all. _sent(10, now), inline (see there).
-            position = 10 * self._byte_us
+            position = 100000  # 10 bytes
             if (self._idle - servo_id) & _TICKS < _AHEAD_MS:
                 servo_id = self._idle
                 position += self._frac
-            self._idle = (servo_id + position // 1000) & _TICKS
-            self._frac = position % 1000
+            self._idle = (servo_id + position // self._baud) & _TICKS
+            self._frac = position % self._baud
 
     def move_many(self, servos, time_ms):
         """CMD_SERVO_MOVE: move 1..83 servos, given as (id, position) pairs or a
@@ -209,12 +210,11 @@ class BusServo:
     def _went(self, cmd):
         # A frame has gone whole (tx holds it). If a request, one more reply
         # may come: count it, so that no reply answers a later request, and
-        # note when it will have left the wire (2 ms early, and 0.1 % of what is
-        # ahead, for the rounding of ms and of a byte's 1041.7 us up to 1042).
+        # note when it will have left the wire (2 ms early: ticks are whole ms).
         kind = cmd == CMD_MULT_SERVO_POS_READ
         if kind or cmd == CMD_GET_BATTERY_VOLTAGE:
             waiting = self._waiting
-            waiting[kind + 4] = time.ticks_add(self._idle, -2 - (self.wire_ms() >> 10))
+            waiting[kind + 4] = time.ticks_add(self._idle, -2)
             if kind:
                 asked = self._asked
                 if not (waiting[1] or waiting[3]):  # none in flight: forget the old counts
@@ -280,17 +280,17 @@ class BusServo:
     def _sent(self, n, now):
         # n more bytes are on their way: the wire is busy until they have left,
         # behind what is on it already (or from now, if it was idle). Kept in
-        # ms, which wrap after 12 days (us would after 18 minutes), and us.
+        # ms, which wrap after 12 days (us would after 18 minutes), and _frac.
         # now is the time before the write: one that waited for room (esp32's
         # does) has seen its first bytes leave already.
         idle = self._idle
-        us = n * self._byte_us
+        units = n * 10000  # 1/baudrate ms
         if (idle - now) & _TICKS < _AHEAD_MS:
-            us += self._frac
+            units += self._frac
         else:
             idle = now
-        self._idle = (idle + us // 1000) & _TICKS
-        self._frac = us % 1000
+        self._idle = (idle + units // self._baud) & _TICKS
+        self._frac = units % self._baud
 
     def _finish(self, at=-1, now=0):
         # Write the rest of the frame in tx that the UART took only part of (from
@@ -307,7 +307,7 @@ class BusServo:
             self._sent(at, now)
         end = buf[2] + 2  # the frame's length, by its Length byte
         deadline = time.ticks_add(
-            time.ticks_ms(), self.wire_ms() + (end - at) * self._byte_us // 1000 + _SLACK_MS
+            time.ticks_ms(), self.wire_ms() + (end - at) * 10000 // self._baud + _SLACK_MS
         )
         while at < end:
             self._cut_at = at
@@ -319,7 +319,7 @@ class BusServo:
             elif time.ticks_diff(now, deadline) >= 0:
                 raise OSError(errno.EIO, "%d of %d bytes sent" % (at, end))
             else:
-                time.sleep_us(self._byte_us)  # room comes a byte at a time
+                time.sleep_us(10000000 // self._baud)  # room comes a byte at a time
         self._cut_at = 0
         self._went(buf[3])
 
@@ -509,7 +509,7 @@ class BusServo:
                     have = w - r
                     missing = rx[r + 2] + 2 - have if have > 2 else _FRAME_MAX
                     quiet = time.ticks_diff(time.ticks_ms(), self._heard)
-                    if quiet < _GAP_MS + missing * self._byte_us // 1000:
+                    if quiet < _GAP_MS + missing * 10000 // self._baud:
                         return None
                     self._r = r + 1
                     self.noise += 1
@@ -534,17 +534,18 @@ class BusServo:
             # request had left the wire and its own bytes had had time to follow. It
             # came before the read that brought it (_heard), and before the bytes
             # read behind it, each a byte's time at least (less 10 %: a fast clock).
-            byte_us = self._byte_us
-            came = time.ticks_add(self._heard, -((self._w - self._r) * byte_us // 1100))
-            answers = time.ticks_diff(came, waiting[kind + 4]) >= (rx[f + 2] + 2) * byte_us // 1000
+            baud = self._baud
+            came = time.ticks_add(self._heard, -((self._w - self._r) * 9000 // baud))
+            answers = time.ticks_diff(came, waiting[kind + 4]) >= (rx[f + 2] + 2) * 10000 // baud
             if kind:  # and only if they have its ids, in order
                 asked = self._asked
                 answers = answers and asked[0] == rx[f + 4]
                 k = 1
                 for i in range(f + 5, f + 5 + 3 * rx[f + 4], 3):
-                    # signed 16-bit, as a servo near 0 may say -3
+                    # Signed 16-bit, as a servo near 0 may say -3; FFFF (-1) is what
+                    # a servo that does not answer (unpowered, missing) reads as: None.
                     position = ((rx[i + 1] | rx[i + 2] << 8) ^ 0x8000) - 0x8000
-                    self.positions[rx[i]] = position
+                    self.positions[rx[i]] = None if position == -1 else position
                     answers = answers and asked[k] == rx[i]
                     k += 1
             else:

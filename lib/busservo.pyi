@@ -78,9 +78,10 @@ class BusServo:
     """How many times the group of the last RUN or COMPLETE runs (0: forever)."""
     battery: int | None
     """The battery's voltage in mV, as last read, or None."""
-    positions: dict[int, int]
+    positions: dict[int, int | None]
     """{servo_id: position}, as last read, updated in place. Signed: a servo near 0 may
-    report a few units below it."""
+    report a few units below it. None: the servo did not answer (the controller read 65535,
+    as it does for a servo unpowered or not on the bus; a servo truly at -1 reads so too)."""
     noise: int
     """Bytes read that were no frame of the controller's: a count for diagnosis."""
     lost: int
@@ -167,11 +168,14 @@ class BusServo:
         once and returned by the next poll() calls. Raises ValueError or TypeError for a bad
         timeout_ms (before anything is written), and OSError(EIO) if the UART takes
         nothing."""
-    def read_positions(self, ids: Sequence[int], timeout_ms: int | None = None) -> dict[int, int]:
+    def read_positions(
+        self, ids: Sequence[int], timeout_ms: int | None = None
+    ) -> dict[int, int | None]:
         """{servo_id: position} for 1..84 servos; positions are signed (a servo near 0 may
-        say -3). Raises OSError(ETIMEDOUT) if no reply comes; the default timeout is 100 ms
-        plus 10 ms per servo (timeout_ms 0..60000), counted from when the request has left
-        the wire. Only a reply that carries exactly these ids, in this order, answers it.
+        say -3), None for a servo that did not answer (unpowered, not on the bus). Raises
+        OSError(ETIMEDOUT) if no reply comes; the default timeout is 100 ms plus 10 ms per
+        servo (timeout_ms 0..60000), counted from when the request has left the wire. Only a
+        reply that carries exactly these ids, in this order, answers it.
 
         Raises ValueError or TypeError for bad ids or timeout_ms, and OSError(EIO) if the
         UART takes nothing."""

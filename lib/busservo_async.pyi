@@ -46,10 +46,11 @@ class AsyncBusServo:
         bad timeout_ms raises ValueError or TypeError before anything is written."""
     async def read_positions(
         self, ids: Sequence[int], timeout_ms: int | None = None
-    ) -> dict[int, int]:
-        """{servo_id: position} for 1..84 servos; the default timeout is 100 ms plus 10 ms per
-        servo. Other tasks run while it waits. Raises OSError(ETIMEDOUT) if no reply comes;
-        bad ids or timeout_ms raise ValueError or TypeError before anything is written."""
+    ) -> dict[int, int | None]:
+        """{servo_id: position} for 1..84 servos (None: the servo did not answer); the default
+        timeout is 100 ms plus 10 ms per servo. Other tasks run while it waits. Raises
+        OSError(ETIMEDOUT) if no reply comes; bad ids or timeout_ms raise ValueError or
+        TypeError before anything is written."""
     def run_group(self, group: int, times: int = 1) -> None:
         """As BusServo.run_group(): run action group `group` (0..255) `times` (0..65535)
         times; 0 = forever. wait_group_done() then waits for this group's end."""
@@ -99,7 +100,7 @@ class AsyncBusServo:
     def battery(self) -> int | None:
         """BusServo.battery: the battery's voltage in mV, as last read, or None."""
     @property
-    def positions(self) -> dict[int, int]:
+    def positions(self) -> dict[int, int | None]:
         """BusServo.positions: {servo_id: position}, as last read."""
     @property
     def noise(self) -> int:

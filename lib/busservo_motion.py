@@ -18,6 +18,7 @@
 # once, in Robot(). Floats are heap objects on most ports, so it does not
 # multiply them: it reads a float's bits (struct.pack_into) and scales them with
 # small ints (Joint.position()).
+import errno
 import json
 import math
 import time
@@ -45,6 +46,19 @@ _bits = bytearray(4)  # a float's bits, for Joint.position()
 _type = type
 _int = int
 _float = float
+
+
+def _load(path, key, saver):
+    # config[key] of the JSON file at path (saver wrote it), or ValueError naming the file
+    # and what is wrong with it.
+    with open(path) as f:
+        try:
+            config = json.load(f)
+        except ValueError as e:
+            raise ValueError("%s: not valid JSON (%s)" % (path, e))
+    if _type(config) is not dict or key not in config:
+        raise ValueError("%s: no %r in it, as %s writes" % (path, key, saver))
+    return config[key]
 
 
 def _number(name, value, low=_NINF, high=_INF):
@@ -208,10 +222,11 @@ class Robot:
     @staticmethod
     def load(bus, path):
         """A Robot on bus with the joints that save() wrote to path."""
-        with open(path) as f:
-            config = json.load(f)
         joints = {}
-        for name, settings in config["joints"].items():
+        saved = _load(path, "joints", "Robot.save()")
+        if _type(saved) is not dict:
+            raise ValueError("%s: joints must be {name: settings}, got %r" % (path, saved))
+        for name, settings in saved.items():
             try:
                 joints[name] = Joint(**settings)
             except TypeError as e:
@@ -245,8 +260,16 @@ class Robot:
         return out, clamped
 
     def _read(self, indices):
-        # Read positions of these joints into _at.
+        # Read positions of these joints into _at. A servo that does not answer (its
+        # position None) has no angle: refuse it by name, before anything is changed.
         got = self.bus.read_positions([self._ids[i] for i in indices])
+        for i in indices:
+            if got[self._ids[i]] is None:
+                raise OSError(
+                    errno.ENODEV,
+                    "joint %r: servo %d does not answer (unpowered, its cable, or its id?)"
+                    % (self.names[i], self._ids[i]),
+                )
         for i in indices:
             self._at[i] = got[self._ids[i]]
 
@@ -482,9 +505,12 @@ class Sequence:
     @staticmethod
     def load(path):
         """The sequence that save() wrote to path."""
-        with open(path) as f:
-            steps = json.load(f)["steps"]
-        return Sequence((step["pose"], step["ms"]) for step in steps)
+        steps = _load(path, "steps", "Sequence.save()")
+        try:
+            steps = [(step["pose"], step["ms"]) for step in steps]
+        except (KeyError, TypeError) as e:
+            raise ValueError('%s: steps must be [{"pose": ..., "ms": ...}]: %r' % (path, e))
+        return Sequence(steps)
 
     def play(self, robot, speed=1.0, loop=False):
         """A Player of this sequence on robot: call its step() from a loop, or

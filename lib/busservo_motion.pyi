@@ -105,7 +105,8 @@ class Robot:
         once."""
     @staticmethod
     def load(bus: BusServo, path: str) -> Robot:
-        """A Robot on bus with the calibration save() wrote to path (JSON)."""
+        """A Robot on bus with the calibration save() wrote to path (JSON). A file that is not
+        valid JSON, or holds no "joints", raises ValueError naming the file and why."""
     def save(self, path: str) -> None:
         """Write the joints' calibration to path as JSON."""
     def move(self, targets: _Pose, ms: int | None = None, dps: float | None = None) -> int:
@@ -117,7 +118,8 @@ class Robot:
         Ends the stream."""
     def where(self, names: Iterable[str] | None = None) -> dict[str, float]:
         """{name: degrees} of these joints (all by default), read now (a blocking query), to
-        0.1 degree."""
+        0.1 degree. A servo that does not answer (unpowered, not on the bus: it reads 65535)
+        raises OSError(ENODEV) naming its joint."""
     def capture(self) -> dict[str, float]:
         """The pose the robot is in, {name: degrees} of every joint, read now: after limp(),
         pose the robot by hand, then capture()."""
@@ -161,7 +163,8 @@ class Sequence:
         """Write the sequence to path as JSON."""
     @staticmethod
     def load(path: str) -> Sequence:
-        """The sequence save() wrote to path."""
+        """The sequence save() wrote to path. A file that is not valid JSON, or holds no
+        "steps" of {"pose", "ms"}, raises ValueError naming the file and why."""
     def play(self, robot: Robot, speed: float = 1.0, loop: bool = False) -> Player:
         """A Player of this sequence on robot (every pose checked first). speed 2.0 plays
         twice as fast; loop plays it for ever (until stop() or estop())."""

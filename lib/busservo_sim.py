@@ -19,6 +19,8 @@
 # - ACTION_GROUP_SPEED scales a group's durations (ALL_GROUPS: every group);
 #   power_cycle() forgets it, as the controller does at power-off;
 # - unload lets servos go limp where they are (`limp`) until they are moved;
+# - a servo in `missing` (ids) does not answer: a position read gives 65535 for it,
+#   as a controller does for a servo unpowered or not on the bus;
 # - the battery reads `battery` mV;
 # - a malformed frame counts one `beeps` (the controller's "beep beep");
 # - it is at the far end of a 9600-baud line (`baudrate`; 10 bits a byte): a frame
@@ -63,6 +65,7 @@ class SimController:
         self.clamped = 0
         self.pwm = set()
         self.limp = set()
+        self.missing = set()
         self._ticks_ms = ticks_ms
         self._byte_us = baudrate and 10000000 // baudrate  # None: no line
         self._servos = {}  # id: (from, to, start ticks, time_ms)
@@ -269,7 +272,7 @@ class SimController:
         elif cmd == CMD_MULT_SERVO_POS_READ:
             reply = [p[0]]
             for servo_id in p[1:]:
-                here = self.position(servo_id)
+                here = 0xFFFF if servo_id in self.missing else self.position(servo_id)
                 reply += (servo_id, here & 0xFF, here >> 8)
             self._send(CMD_MULT_SERVO_POS_READ, *reply)
         elif cmd == SIM_SILENT:

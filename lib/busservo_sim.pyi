@@ -17,6 +17,8 @@ It decodes what the driver writes and answers as the protocol says:
 - ACTION_GROUP_SPEED scales a group's durations (ALL_GROUPS: every group); power_cycle()
   forgets it, as the controller does at power-off;
 - unload lets servos go limp where they are (`limp`) until they are moved;
+- a servo in `missing` does not answer: a position read gives 65535 for it, as a controller
+  does for a servo unpowered or not on the bus (the driver reads it as None);
 - the battery reads `battery` mV;
 - a malformed frame counts one `beeps` (the controller's "beep beep");
 - it is at the far end of a 9600-baud line (10 bits a byte): a frame written to it is in once
@@ -57,6 +59,8 @@ class SimController:
     """The ids of PWM servos (an LSC board's, 500..2500 us): they turn up to PWM_LIMIT."""
     limp: set[int]
     """The servos unloaded (limp) since they last moved."""
+    missing: set[int]
+    """The ids of servos that do not answer: a position read gives 65535 for each."""
 
     def __init__(
         self,

@@ -166,6 +166,15 @@ class Frames(unittest.TestCase):
         self.assertEqual(bus.poll(), CMD_MULT_SERVO_POS_READ)
         self.assertEqual(bus.positions[83], 1083)
 
+    def test_a_servo_that_does_not_answer_reads_none(self):
+        # The controller reads 65535 (FF FF) for a servo unpowered or not on the bus: that is
+        # no position. (A servo truly at -1 reads the same.)
+        reply = bytes((0x55, 0x55, 0x09, 0x15, 0x02, 0x01, 0xFF, 0xFF, 0x02, 0xFE, 0xFF))
+        uart, bus = fresh(frames=[reply])
+        uart.feed(reply)
+        self.assertEqual(bus.poll(), CMD_MULT_SERVO_POS_READ)
+        self.assertEqual(bus.positions, {1: None, 2: -2})
+
     def test_positions_are_updated_in_place(self):
         uart, bus = fresh(frames=[POSITIONS_ALL_500])
         positions = bus.positions

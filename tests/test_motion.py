@@ -3,6 +3,7 @@
 # UART models, the simulated controller). The driver and the motion layer both run on the
 # world's clock: busservo.time = busservo_motion.time = w.clock.
 import asyncio
+import errno
 import math
 import os
 import time
@@ -178,6 +179,31 @@ class Calibration(Tidy):
             again.joints["shoulder"].position(-45), arm(bus).joints["shoulder"].position(-45)
         )
 
+    def test_a_file_that_is_no_calibration_or_sequence_says_which_and_why(self):
+        w, bus = world()
+        path = scratch("motion") + ".json"
+        try:
+            for text, words in (
+                ("{not json", ("not valid JSON",)),
+                ('{"steps": []}', ("'joints'", "Robot.save()")),
+                ('{"joints": [1, 2]}', ("joints must be {name: settings}",)),
+                ('{"joints": {"base": {"id": 1}}}', ("joint 'base'",)),
+            ):
+                with open(path, "w") as f:
+                    f.write(text)
+                raises(lambda: bm.Robot.load(bus, path), path, *words)
+            for text, words in (
+                ("", ("not valid JSON",)),
+                ('{"joints": {}}', ("'steps'", "Sequence.save()")),
+                ('{"steps": [{"pose": {"base": 1}}]}', ("steps must be", "ms")),
+                ('{"steps": 5}', ("steps must be",)),
+            ):
+                with open(path, "w") as f:
+                    f.write(text)
+                raises(lambda: bm.Sequence.load(path), path, *words)
+        finally:
+            os.remove(path)
+
 
 class Moves(Tidy):
     def test_a_move_in_degrees_is_one_frame_for_all_its_joints(self):
@@ -234,6 +260,23 @@ class Moves(Tidy):
         hand(w, {1: 624, 2: 702, 6: 2000})
         self.assertEqual(a.where(), {"base": 29.8, "shoulder": -45.0, "claw": 45.0})
         self.assertEqual(a.where(["claw"]), {"claw": 45.0})
+
+    def test_a_servo_that_does_not_answer_is_refused_by_name(self):
+        # It reads 65535 (None to the driver): no angle is made of it, and nothing moves.
+        w, bus = world()
+        a = arm(bus)
+        w.sim.missing.add(2)
+        for call in (a.where, a.capture, lambda: a.move({"shoulder": 10}, dps=30), a.home):
+            try:
+                call()
+                error = None
+            except OSError as e:
+                error = e
+            self.assertEqual(error.args[0], errno.ENODEV)
+            self.assertIn("joint 'shoulder': servo 2 does not answer", str(error))
+        settle(w, bus, 20)
+        self.assertEqual(moves(w), [])
+        self.assertEqual(a.where(["base"]), {"base": 0.0})  # the others still read
 
     def test_limp_then_capture_reads_the_pose_made_by_hand(self):
         w, bus = world()

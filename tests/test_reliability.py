@@ -328,10 +328,10 @@ class Wire(unittest.TestCase):
             for i in range(129):  # 129 x 127 bytes
                 bus.move_many([(s, 500 + i) for s in range(1, 41)], 100)
             ahead = w.tx_backlog_us() // 1000
-            # The driver rounds a byte up to 1042 us (from 1041.7): it says a little more,
-            # 1 ms every 3000 bytes it wrote, and a few ms of rounding to whole ms.
+            # The driver counts a byte's 1041.67 us exactly (in 1/9600 ms): all it adds is
+            # the rounding to whole ms.
             more = bus.wire_ms() - ahead
-            self.assertTrue(0 <= more <= 5 + 129 * 127 // 3000, (port, bus.wire_ms(), ahead))
+            self.assertTrue(0 <= more <= 2, (port, bus.wire_ms(), ahead))
             self.assertEqual(bus.read_battery(), 7500, port)
 
     def test_wire_ms_counts_10_bits_a_byte(self):

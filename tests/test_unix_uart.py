@@ -256,6 +256,23 @@ class NoTty(unittest.TestCase):
         finally:
             os.remove(path)
 
+    def test_a_number_is_no_path_and_nothing_is_opened(self):
+        # uart(0), a board's UART(0) habit: open(0) would be this process's own terminal,
+        # put in raw mode. Anything but a path string is refused before anything is opened.
+        unix = load_unix(Termios(), Select())
+        opened = []
+        unix.open = lambda path, mode: opened.append(path)
+        for bad in (0, 2, b"/dev/ttyUSB0", None):
+            try:
+                unix.uart(bad)
+            except TypeError as e:
+                self.assertIn("path", str(e))
+                self.assertIn("/dev/ttyUSB0", str(e))
+                self.assertIn(repr(bad), str(e))
+            else:
+                self.fail("uart(%r) was taken" % (bad,))
+        self.assertEqual(opened, [])
+
 
 class SimPty(unittest.TestCase):
     # The simulated controller behind a pty, its server then stopped: the pty's
