@@ -15,3 +15,19 @@ from machine import UART, Pin
 
 def uart():
     return UART(0, baudrate=9600, tx=Pin(0), rx=Pin(1))
+
+
+def button():
+    # The BOOTSEL button, which every Pico has: examples/teach.py captures a pose at each
+    # press. It reads as a Pin with a pull-up does, 0 while pressed.
+    import rp2  # MicroPython's own (this file is board.py on the board)
+
+    return _Pressed(rp2.bootsel_button)
+
+
+class _Pressed:
+    def __init__(self, pressed):
+        self._pressed = pressed  # 1 while the button is down
+
+    def value(self):
+        return 0 if self._pressed() else 1

@@ -5,7 +5,7 @@
 #
 # MYPYPATH is lib:boards:tests/stubs. In lib/, busservo.pyi takes precedence over busservo.py.
 # tests/stubs/ holds the MicroPython modules CPython's typeshed lacks (machine, board) or has
-# in another form (time, asyncio, termios: it shadows those). A few MicroPython-isms that
+# in another form (time, asyncio, termios, gc: it shadows those). A few MicroPython-isms that
 # typeshed's own os and io contradict are let through, module by module, below.
 set -u
 cd "$(dirname "$0")/.."
@@ -34,6 +34,11 @@ cache_dir = .venv/mypy_cache
 
 # boards/esp8266.py: MicroPython's os has dupterm(); CPython's has not.
 [mypy-esp8266]
+disable_error_code = attr-defined
+
+# boards/rp2.py: its button() imports MicroPython's rp2 module, which this file's own name
+# (rp2) hides here; on a board the file is board.py.
+[mypy-rp2]
 disable_error_code = attr-defined
 
 # boards/unix.py: MicroPython's files take write(buf, off, n); CPython's take write(buf).
