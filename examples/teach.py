@@ -3,7 +3,16 @@
 # Enter (or board.py's button, if it has one) to capture each pose (q and Enter to end), the
 # poses are saved to teach.json, and the robot plays them back. On the simulator no one can
 # pose it, so the example poses it.
-#   mpremote run examples/teach.py          (at the board's REPL: input() needs a console)
+#
+# On a board it runs at the board's REPL, where your Enter reaches it (`mpremote run`
+# forwards no keys: input() would wait for ever, the arm limp). With the driver, the motion
+# layer and board.py on the board:
+#   mpremote cp examples/teach.py :teach.py
+#   mpremote repl              then type: import teach      (Ctrl-] leaves mpremote)
+# To teach again: Ctrl-D (a soft reset), then import teach. With a board.py that offers
+# button() (boards/esp32.py: BOOT; boards/rp2.py: BOOTSEL) a press captures each pose and a
+# 1 s press ends, with no keys at all: `mpremote run examples/teach.py` works then too.
+#   sh boards/unix.sh examples/teach.py     # unix port, simulated controller
 import time
 
 import busservo

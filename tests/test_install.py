@@ -128,6 +128,29 @@ class MipWeb(unittest.TestCase):
 
 
 class Mpremote(unittest.TestCase):
+    def setUp(self):
+        if not sh("command -v socat")[0]:
+            print(
+                "\n*** SKIPPED: socat is missing and could not be installed: mpremote untested ***"
+            )
+            raise unittest.SkipTest("socat is missing")
+        self.device = device = scratch("device")
+        self.pty = device + ".pty"
+        os.mkdir(device)
+        # The unix port's REPL behind a pty, in an empty folder: its filesystem.
+        self.repl = start(
+            "cd %s && MICROPYPATH=.frozen exec socat PTY,link=%s,raw,echo=0 "
+            "EXEC:%s/%s,pty,raw,echo=0,stderr,setsid,ctty"
+            % (device, self.pty, os.getcwd(), MICROPYTHON),
+            device + ".log",
+        )
+        self.assertTrue(wait_for(self.pty), "socat made no pty")
+        self.connect = "%s connect %s resume " % (MPREMOTE, self.pty)  # resume: no soft reset
+
+    def tearDown(self):
+        stop(self.repl)
+        sh("rm -rf %s %s.log %s" % (self.device, self.device, self.pty))
+
     def readme_commands(self):
         # The README's own mpremote commands that copy from lib/ and run examples/ (but the
         # web panel, which serves until Ctrl-C: test_examples.py runs it).
@@ -142,40 +165,73 @@ class Mpremote(unittest.TestCase):
         ]
 
     def test_the_readme_commands_copy_and_run_on_a_repl(self):
-        if not sh("command -v socat")[0]:
-            print(
-                "\n*** SKIPPED: socat is missing and could not be installed: mpremote untested ***"
-            )
-            raise unittest.SkipTest("socat is missing")
         commands = self.readme_commands()
         self.assertTrue(len(commands) >= 3, commands)
-        device = scratch("device")
-        pty = device + ".pty"
-        os.mkdir(device)
-        # The unix port's REPL behind a pty, in an empty folder: its filesystem.
-        repl = start(
-            "cd %s && MICROPYPATH=.frozen exec socat PTY,link=%s,raw,echo=0 "
-            "EXEC:%s/%s,pty,raw,echo=0,stderr,setsid,ctty"
-            % (device, pty, os.getcwd(), MICROPYTHON),
-            device + ".log",
-        )
+        for command in commands:
+            ok, out = sh(self.connect + command)
+            self.assertTrue(ok, command + ": " + out)
+        ok, out = sh(self.connect + "exec 'import busservo; print(busservo.__file__)'")
+        self.assertEqual(out.strip(), "busservo.py")  # the copy, not lib/
+        self.assertTrue("busservo.py" in os.listdir(self.device))
+        ok, out = sh(self.connect + "run examples/battery.py")
+        self.assertTrue(ok, out)
+        lines = out.split("\n")  # no board.py on this "board": the simulator, said first
+        self.assertTrue(lines[0].startswith("no board.py found: using the simulated"), out)
+        self.assertIn("battery: 7500 mV", lines)
+
+    def test_teaching_at_the_boards_repl_takes_the_keys_typed(self):
+        # examples/teach.py's own route for a board (its header's mpremote lines), through the
+        # real mpremote, with Enter typed at each pose (tests/typist.py is the person). A
+        # board.py whose controller is the simulator behind a 9600-baud line; the example
+        # opted in, as a maker who checked the robot sets it.
+        with open("examples/teach.py") as f:
+            header = [
+                line[len("#   mpremote ") :] for line in f if line.startswith("#   mpremote ")
+            ]
+        route = [line.split("  ")[0].strip() for line in header]
+        self.assertEqual(route, ["cp examples/teach.py :teach.py", "repl"])
+        self.assertIn("then type: import teach", header[1])
+        files = scratch("teach")
+        os.mkdir(files)
         try:
-            self.assertTrue(wait_for(pty), "socat made no pty")
-            connect = "%s connect %s resume " % (MPREMOTE, pty)  # resume: no soft reset
-            for command in commands:
-                ok, out = sh(connect + command)
+            with open("examples/teach.py") as f:
+                text = f.read()
+            with open(files + "/teach.py", "w") as f:
+                f.write(
+                    text.replace(
+                        "I_HAVE_CHECKED_MY_ROBOT = False", "I_HAVE_CHECKED_MY_ROBOT = True"
+                    )
+                )
+            with open(files + "/board.py", "w") as f:
+                f.write("from busservo_sim import SimController as uart\n")
+            for command in (
+                "cp lib/busservo.py :busservo.py",
+                "cp lib/busservo_motion.py :busservo_motion.py",
+                "cp lib/busservo_sim.py :busservo_sim.py",
+                "cp %s/board.py :board.py" % files,
+                route[0].replace("examples/", files + "/"),  # the opted-in copy
+            ):
+                ok, out = sh(self.connect + command)
                 self.assertTrue(ok, command + ": " + out)
-            ok, out = sh(connect + "exec 'import busservo; print(busservo.__file__)'")
-            self.assertEqual(out.strip(), "busservo.py")  # the copy, not lib/
-            self.assertTrue("busservo.py" in os.listdir(device))
-            ok, out = sh(connect + "run examples/battery.py")
-            self.assertTrue(ok, out)
-            lines = out.split("\n")  # no board.py on this "board": the simulator, said first
-            self.assertTrue(lines[0].startswith("no board.py found: using the simulated"), out)
-            self.assertIn("battery: 7500 mV", lines)
         finally:
-            stop(repl)
-            sh("rm -rf %s %s.log %s" % (device, device, pty))
+            sh("rm -rf " + files)
+        keys = (
+            ("exit this shell", "\\r"),  # mpremote is connected: Enter, for a prompt
+            (">>> ", "import teach\\r"),
+            ("pose 1: ", "\\r"),
+            ("pose 2: ", "\\r"),
+            ("pose 3: ", "q\\r"),
+            ("played back 2 poses", ""),
+            (">>> ", "\\x1d"),  # Ctrl-]: mpremote leaves
+        )
+        typed = " ".join("'%s' '%s'" % pair for pair in keys)
+        ok, out = sh(
+            ".venv/bin/python tests/typist.py 30 %s -- %s" % (typed, self.connect + route[1])
+        )
+        self.assertTrue(ok, out)
+        for line in ("captured pose 1: ", "captured pose 2: ", "saved 2 poses to teach.json"):
+            self.assertIn(line, out)
+        self.assertIn("teach.json", os.listdir(self.device))  # on the board, not here
 
 
 class Manifest(unittest.TestCase):
