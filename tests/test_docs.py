@@ -53,6 +53,14 @@ def pins(board):
     number = uart[len("UART(") : uart.index(",")]
     tx = uart[uart.index("tx=") + 3 :].split(",")[0].strip(")")
     rx = uart[uart.index("rx=") + 3 :].split(",")[0].strip(")")
+
+    def value(name):  # esp32.py: UART(UART_ID, ...), with UART_ID = 2 at its top
+        for line in source.split("\n"):
+            if line.startswith(name + " = "):
+                return line[len(name) + 3 :].split()[0]
+        return name
+
+    number, tx, rx = value(number), value(tx), value(rx)
     if "Pin(" in tx:  # rp2.py: tx=Pin(0), rx=Pin(1): the Pico's names are GP0, GP1
         return ["UART" + number, "GP" + tx[4:] + " ", "GP" + rx[4:] + " "]
     return ["UART" + number, "GPIO" + tx + " TX", "GPIO" + rx + " RX"]
@@ -157,7 +165,9 @@ class Pictures(unittest.TestCase):
 
     def test_the_pin_table_matches_the_board_files(self):
         table = read("boards/README.md")
-        self.assertIn("| `esp32.py` | ESP32 | UART2 | GPIO17 | GPIO16 |", table)
+        self.assertIn(
+            "| `esp32.py` | ESP32 (WROOM modules, ESP32-S3) | UART2 | GPIO17 | GPIO16 |", table
+        )
         self.assertIn(
             "| `rp2.py` | Raspberry Pi Pico (rp2) | UART0 | GP0 (pin 1) | GP1 (pin 2) |", table
         )
