@@ -13,6 +13,8 @@ import errno
 import time
 from micropython import const
 
+__version__ = "0.1.0"  # as package.json says
+
 CMD_SERVO_MOVE = const(3)
 CMD_ACTION_GROUP_RUN = const(6)
 CMD_ACTION_GROUP_STOP = const(7)
@@ -39,9 +41,6 @@ _TICKS = const(0x3FFFFFFF)  # ticks modulo 2**30, as a 32-bit port's wrap
 _AHEAD_MS = const(40000)  # more ahead than this: ticks came round (rp2's largest txbuf: 34 s)
 _SLACK_MS = const(50)  # for a UART's transmit buffer to make room, beyond the wire time
 
-# The Length of each frame the controller sends, by its command (0: it sends
-# none): RUN 5, STOP 2, COMPLETE 5, battery 4; positions 3n + 3 (marked 3).
-_LENGTHS = b"\0\0\0\0\0\0\5\2\5\0\0\0\0\0\0\4\0\0\0\0\0\3"
 
 # Builtins are slow to look up; module globals are quick. The hot paths check
 # their arguments' types with these. (They store 16-bit values' low bytes with
@@ -460,7 +459,16 @@ class BusServo:
                     if ok and have > 3:
                         length = rx[r + 2]
                         cmd = rx[r + 3]
-                        ok = _LENGTHS[cmd] if cmd < 22 else 0
+                        # The Length of each frame the controller sends (0: it sends
+                        # none): RUN 5, STOP 2, COMPLETE 5, battery 4, positions 3n + 3.
+                        if cmd == CMD_ACTION_GROUP_RUN or cmd == CMD_ACTION_GROUP_COMPLETE:
+                            ok = 5
+                        elif cmd == CMD_ACTION_GROUP_STOP:
+                            ok = 2
+                        elif cmd == CMD_GET_BATTERY_VOLTAGE:
+                            ok = 4
+                        else:
+                            ok = 3 if cmd == CMD_MULT_SERVO_POS_READ else 0
                         if ok == 3:
                             # Positions come only in reply, to n >= 1 ids (Prm 1), with
                             # Length 3n + 3: a request in flight must have asked for n.

@@ -289,6 +289,11 @@ class Manifest(unittest.TestCase):
         )
         self.assertEqual(meta["version"], version_of_package_json())
 
+    def test_the_driver_says_the_version_package_json_says(self):
+        import busservo
+
+        self.assertEqual(busservo.__version__, version_of_package_json())
+
     def test_package_json_names_files_that_exist(self):
         with open("package.json") as f:
             package = json.load(f)
