@@ -38,6 +38,7 @@ _LATE_MS = const(100)  # how long after its query gave up a reply may still come
 _FORGET_MS = const(1000)  # a request given up on this long ago had its reply lost
 _GAP_MS = const(20)  # a frame's bytes come closer together than this, FIFOs and all
 _TICKS = const(0x3FFFFFFF)  # ticks modulo 2**30, as a 32-bit port's wrap
+_HALF = const(0x20000000)  # half of that: a later time, or an earlier one
 _AHEAD_MS = const(40000)  # more ahead than this: ticks came round (rp2's largest txbuf: 34 s)
 _SLACK_MS = const(50)  # for a UART's transmit buffer to make room, beyond the wire time
 
@@ -79,7 +80,9 @@ class BusServo:
         self._any = uart.any
         # The wire: a byte is 10 bits (8N1), 10000 / baudrate ms. _idle (ticks_ms) and _frac
         # (in 1/baudrate ms, so a byte is 10000 of them: exact) say when what was written
-        # will have left it.
+        # will have left it. _idle, and the times taken from it, are ticks modulo 2**30, as a
+        # 32-bit port counts, compared by masked differences: right on the unix port's
+        # longer ticks too.
         self._baud = baudrate
         self._idle = time.ticks_ms()
         self._frac = 0
@@ -213,7 +216,7 @@ class BusServo:
         kind = cmd == CMD_MULT_SERVO_POS_READ
         if kind or cmd == CMD_GET_BATTERY_VOLTAGE:
             waiting = self._waiting
-            waiting[kind + 4] = time.ticks_add(self._idle, -2)
+            waiting[kind + 4] = (self._idle - 2) & _TICKS
             if kind:
                 asked = self._asked
                 if not (waiting[1] or waiting[3]):  # none in flight: forget the old counts
@@ -359,7 +362,7 @@ class BusServo:
         if self._cut_at:
             self._finish()  # a request cut short goes first: its reply is waited out
         start = time.ticks_add(time.ticks_ms(), self.wire_ms())  # when the wire is free
-        if waiting[kind + 2] and time.ticks_diff(start, waiting[kind + 6]) > _FORGET_MS:
+        if waiting[kind + 2] and (start - waiting[kind + 6]) & _TICKS > _FORGET_MS:
             waiting[kind + 2] = 0  # given up on long ago: lost, not late
         while True:  # decode what has come first: none of it answers this query
             got = self._next_frame()
@@ -543,8 +546,9 @@ class BusServo:
             # came before the read that brought it (_heard), and before the bytes
             # read behind it, each a byte's time at least (less 10 %: a fast clock).
             baud = self._baud
-            came = time.ticks_add(self._heard, -((self._w - self._r) * 9000 // baud))
-            answers = time.ticks_diff(came, waiting[kind + 4]) >= (rx[f + 2] + 2) * 10000 // baud
+            came = self._heard - (self._w - self._r) * 9000 // baud
+            came -= waiting[kind + 4] + (rx[f + 2] + 2) * 10000 // baud  # its earliest
+            answers = came & _TICKS < _HALF
             if kind:  # and only if they have its ids, in order
                 asked = self._asked
                 answers = answers and asked[0] == rx[f + 4]

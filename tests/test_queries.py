@@ -137,6 +137,30 @@ class Queries(unittest.TestCase):
         self.assertEqual(held, 32)
         self.assertEqual(self.bus.lost, 8)
 
+    def test_queries_on_ticks_past_2_to_the_30(self):
+        # The unix port's ticks run to 2**62 (its clock counts from the machine's boot): after
+        # 12.4 days up they pass 2**30, where a 32-bit port's come round. The driver's wire
+        # times are ticks modulo 2**30; a reply's must be compared with them alike.
+        class Later:
+            def ticks_ms(self):
+                return time.ticks_ms() + (3 << 30)
+
+            ticks_add = staticmethod(time.ticks_add)
+            ticks_diff = staticmethod(time.ticks_diff)
+            sleep_us = staticmethod(time.sleep_us)
+
+        busservo.time = Later()
+        try:
+            bus = busservo.BusServo(self.uart)
+            self.uart.reply(GET_BATTERY, BATTERY_7500)
+            self.uart.reply(READ_1_TO_6, POSITIONS_ALL_500)
+            self.assertEqual(bus.read_battery(), 7500)
+            self.assertEqual(bus.read_positions([1, 2, 3, 4, 5, 6]), ALL_500)
+            bus.move(1, 500, 0)
+            self.assertIn(bus.wire_ms(), (10, 11))
+        finally:
+            busservo.time = time
+
     def test_a_query_with_bad_arguments_reads_nothing_away(self):
         self.uart.feed(STOP)
         with self.assertRaises(ValueError):
