@@ -6,20 +6,16 @@ import asyncio
 import time
 
 import busservo
+import busservo_board
 from busservo_async import AsyncBusServo
 
 # Set True once you have checked that servo 1 can turn to 900 and servo 2 to 100, with nothing
 # in their way, and that your robot has room for action group 1.
 I_HAVE_CHECKED_MY_ROBOT = False
 
-try:
-    from board import uart  # your board file: boards/<port>.py, copied as board.py
-except ImportError as e:
-    if "'board'" not in str(e):
-        raise  # board.py is there but fails to import: its error, not the simulator
-    from busservo_sim import uart
-
-    print("no board.py found: using the simulated controller, nothing real moves")
+# board.py's UART, or the simulated controller; the BusServo's asyncio face.
+bus = AsyncBusServo(busservo_board.bus())
+if busservo_board.simulated:
     I_HAVE_CHECKED_MY_ROBOT = True  # nothing real to check
 
 # The controller's events by name: events() gives their command numbers.
@@ -29,9 +25,6 @@ EVENTS = {
     busservo.CMD_ACTION_GROUP_COMPLETE: "ACTION_GROUP_COMPLETE",
 }
 
-port = uart()
-print("talking to", port)
-bus = AsyncBusServo(port)
 loops = 0
 
 

@@ -3,19 +3,10 @@
 import time
 
 import busservo
+import busservo_board
 
-try:
-    from board import uart  # your board file: boards/<port>.py, copied as board.py
-except ImportError as e:
-    if "'board'" not in str(e):
-        raise  # board.py is there but fails to import: its error, not the simulator
-    from busservo_sim import uart
+bus = busservo_board.bus()  # board.py's UART, or the simulated controller
 
-    print("no board.py found: using the simulated controller, nothing real moves")
-
-port = uart()
-print("talking to", port)
-bus = busservo.BusServo(port)
 bus.request_battery()  # the answer comes through poll(): nothing waits for it
 for _ in range(100):  # about 100 ms at most
     if bus.poll() == busservo.CMD_GET_BATTERY_VOLTAGE:

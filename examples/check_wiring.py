@@ -7,18 +7,11 @@ import errno
 import sys
 import time
 
-import busservo
+import busservo_board
 
 READ_SERVOS = 0  # set 6, say, to read servos 1..6 too, once the controller answers
 
-try:
-    from board import uart  # your board file: boards/<port>.py, copied as board.py
-except ImportError as e:
-    if "'board'" not in str(e):
-        raise  # board.py is there but fails to import: its error, not the simulator
-    from busservo_sim import uart
-
-    print("no board.py found: using the simulated controller, nothing real moves")
+bus = busservo_board.bus()  # board.py's UART, or the simulated controller
 
 # Why a controller stays silent, the most likely first: (the cause, how to check it).
 CAUSES = (
@@ -33,9 +26,6 @@ CAUSES = (
     ),
 )
 
-port = uart()
-print("talking to", port)
-bus = busservo.BusServo(port)
 mv = None  # no answer yet
 start = time.ticks_us()
 try:

@@ -7,20 +7,15 @@
 import time
 
 import busservo
+import busservo_board
 
 # Set True once you have checked that servos 1..6 can each turn a little (100 of their 1000)
 # toward the middle of their range (down, from the middle), and that your robot has room for
 # action group 1.
 I_HAVE_CHECKED_MY_ROBOT = False
 
-try:
-    from board import uart  # your board file: boards/<port>.py, copied as board.py
-except ImportError as e:
-    if "'board'" not in str(e):
-        raise  # board.py is there but fails to import: its error, not the simulator
-    from busservo_sim import uart
-
-    print("no board.py found: using the simulated controller, nothing real moves")
+bus = busservo_board.bus()  # board.py's UART, or the simulated controller
+if busservo_board.simulated:
     I_HAVE_CHECKED_MY_ROBOT = True  # nothing real to check
 
 SERVOS = (1, 2, 3, 4, 5, 6)
@@ -68,9 +63,6 @@ def wait_for(bus, want, timeout_ms):
 
 
 def main():
-    port = uart()
-    say("talking to %s" % port)
-    bus = busservo.BusServo(port)
     say("battery: %.2f V" % (bus.read_battery() / 1000))
     read = bus.read_positions(SERVOS)
     say("the servos are at:")

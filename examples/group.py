@@ -5,18 +5,13 @@
 import time
 
 import busservo
+import busservo_board
 
 # Set True once you know what action groups 1 and 2 do and your robot has room to do it.
 I_HAVE_CHECKED_MY_ROBOT = False
 
-try:
-    from board import uart  # your board file: boards/<port>.py, copied as board.py
-except ImportError as e:
-    if "'board'" not in str(e):
-        raise  # board.py is there but fails to import: its error, not the simulator
-    from busservo_sim import uart
-
-    print("no board.py found: using the simulated controller, nothing real moves")
+bus = busservo_board.bus()  # board.py's UART, or the simulated controller
+if busservo_board.simulated:
     I_HAVE_CHECKED_MY_ROBOT = True  # nothing real to check
 
 # The controller's events by name: poll() returns their command numbers.
@@ -26,9 +21,6 @@ EVENTS = {
     busservo.CMD_ACTION_GROUP_COMPLETE: "ACTION_GROUP_COMPLETE",
 }
 
-port = uart()
-print("talking to", port)
-bus = busservo.BusServo(port)
 print("servos 1..6 are at", sorted(bus.read_positions([1, 2, 3, 4, 5, 6]).items()))
 print("this runs action group 1 once, then group 2 over and over, and stops it after 0.5 s")
 if not I_HAVE_CHECKED_MY_ROBOT:

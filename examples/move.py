@@ -2,24 +2,15 @@
 #   mpremote run examples/move.py
 import time
 
-import busservo
+import busservo_board
 
 # Set True once you have checked that servo 1 can turn freely, with nothing in its way.
 I_HAVE_CHECKED_MY_ROBOT = False
 
-try:
-    from board import uart  # your board file: boards/<port>.py, copied as board.py
-except ImportError as e:
-    if "'board'" not in str(e):
-        raise  # board.py is there but fails to import: its error, not the simulator
-    from busservo_sim import uart
-
-    print("no board.py found: using the simulated controller, nothing real moves")
+bus = busservo_board.bus()  # board.py's UART, or the simulated controller
+if busservo_board.simulated:
     I_HAVE_CHECKED_MY_ROBOT = True  # nothing real to check
 
-port = uart()
-print("talking to", port)
-bus = busservo.BusServo(port)
 print("servo 1 is at", bus.read_positions([1])[1])
 print("this moves it to 800 over 2 s, then back to 500 over 2 s")
 if not I_HAVE_CHECKED_MY_ROBOT:

@@ -2,24 +2,15 @@
 #   mpremote run examples/move_many.py
 import time
 
-import busservo
+import busservo_board
 
 # Set True once you have checked that servos 1..6 can turn freely, with nothing in their way.
 I_HAVE_CHECKED_MY_ROBOT = False
 
-try:
-    from board import uart  # your board file: boards/<port>.py, copied as board.py
-except ImportError as e:
-    if "'board'" not in str(e):
-        raise  # board.py is there but fails to import: its error, not the simulator
-    from busservo_sim import uart
-
-    print("no board.py found: using the simulated controller, nothing real moves")
+bus = busservo_board.bus()  # board.py's UART, or the simulated controller
+if busservo_board.simulated:
     I_HAVE_CHECKED_MY_ROBOT = True  # nothing real to check
 
-port = uart()
-print("talking to", port)
-bus = busservo.BusServo(port)
 SERVOS = [1, 2, 3, 4, 5, 6]
 here = bus.read_positions(SERVOS)
 print("servos 1..6 are at", [here[i] for i in SERVOS])

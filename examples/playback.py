@@ -6,33 +6,20 @@
 import asyncio
 import time
 
-import busservo
+import busservo_board
 import busservo_motion as bm
 
 # Set True once you have checked that servos 1..4 can turn freely, with nothing in their way.
 I_HAVE_CHECKED_MY_ROBOT = False
 DPS: int | None = 30  # on a real robot no joint turns faster (degrees a second)
 
-try:
-    from board import uart  # your board file: boards/<port>.py, copied as board.py
-except ImportError as e:
-    if "'board'" not in str(e):
-        raise  # board.py is there but fails to import: its error, not the simulator
-    from busservo_sim import uart
-
-    print("no board.py found: using the simulated controller, nothing real moves")
+bus = busservo_board.bus()  # board.py's UART, or the simulated controller
+if busservo_board.simulated:
     I_HAVE_CHECKED_MY_ROBOT = True  # nothing real to check
     DPS = None  # nor to hurt: full speed
 
-port = uart()
-print("talking to", port)
-bus = busservo.BusServo(port)
-print("the servos are at", bus.read_positions([1, 2, 3, 4]))
-print("this plays teach.json (or a wave) on them, at most 30 degrees/s on a real robot")
-if not I_HAVE_CHECKED_MY_ROBOT:
-    print("nothing moved: check, then set I_HAVE_CHECKED_MY_ROBOT = True (top of this file)")
-    raise SystemExit
-arm = bm.Robot(
+# Your calibration (robot.json, if you saved one), or these joints.
+arm = busservo_board.robot(
     bus,
     {
         "base": bm.Joint(1, dps=DPS),
@@ -41,17 +28,18 @@ arm = bm.Robot(
         "claw": bm.Joint(4, limits=(0, 60), dps=DPS),
     },
 )
+print("the servos are at", bus.read_positions([arm.joints[n].servo_id for n in arm.names]))
+print("this plays teach.json (or a wave) on them, at most 30 degrees/s on a real robot")
+if not I_HAVE_CHECKED_MY_ROBOT:
+    print("nothing moved: check, then set I_HAVE_CHECKED_MY_ROBOT = True (top of this file)")
+    raise SystemExit
 try:
     sequence = bm.Sequence.load("teach.json")
     print("teach.json: %d poses" % len(sequence))
 except OSError:  # no such file
+    # Every joint to 20 degrees, to -20, then back to 0 (within its limits: clamped).
     sequence = bm.Sequence(
-        [
-            ({"base": 0, "shoulder": 20, "elbow": -20, "claw": 0}, 600),
-            ({"base": 30, "shoulder": 40, "elbow": -50}, 400),
-            ({"base": -30, "claw": 50}, 400),
-            ({"base": 0, "shoulder": 20, "elbow": -20, "claw": 0}, 400),
-        ]
+        [({name: degrees for name in arm.names}, 500) for degrees in (0, 20, -20, 0)]
     )
     print("a wave of %d poses (no teach.json)" % len(sequence))
 

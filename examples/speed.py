@@ -2,19 +2,10 @@
 # Nothing runs until examples/group.py (or your code) starts a group.
 #   mpremote run examples/speed.py
 import busservo
+import busservo_board
 
-try:
-    from board import uart  # your board file: boards/<port>.py, copied as board.py
-except ImportError as e:
-    if "'board'" not in str(e):
-        raise  # board.py is there but fails to import: its error, not the simulator
-    from busservo_sim import uart
+bus = busservo_board.bus()  # board.py's UART, or the simulated controller
 
-    print("no board.py found: using the simulated controller, nothing real moves")
-
-port = uart()
-print("talking to", port)
-bus = busservo.BusServo(port)
 bus.set_group_speed(busservo.ALL_GROUPS, 100)  # every group at its own pace
 bus.set_group_speed(1, 50)  # then group 1 at half of it: it takes twice as long
 print("action group 1 at 50 %, the others at 100 %, until the controller is switched off")

@@ -6,34 +6,30 @@
 import math
 import time
 
-import busservo
+import busservo_board
 import busservo_motion as bm
 
 # Set True once you have checked that servos 1..6 can turn 60 degrees each way, freely.
 I_HAVE_CHECKED_MY_ROBOT = False
 DPS: int | None = 30  # on a real robot no joint turns faster (degrees a second)
 
-try:
-    from board import uart  # your board file: boards/<port>.py, copied as board.py
-except ImportError as e:
-    if "'board'" not in str(e):
-        raise  # board.py is there but fails to import: its error, not the simulator
-    from busservo_sim import uart
-
-    print("no board.py found: using the simulated controller, nothing real moves")
+bus = busservo_board.bus()  # board.py's UART, or the simulated controller
+if busservo_board.simulated:
     I_HAVE_CHECKED_MY_ROBOT = True  # nothing real to check
     DPS = None  # nor to hurt: full speed
 
 SECONDS = 3
-port = uart()
-bus = busservo.BusServo(port)
-print("talking to", port)
-print("the servos are at", bus.read_positions([1, 2, 3, 4, 5, 6]))
+# Your calibration (robot.json, if you saved one), or six joints of servos 1..6.
+arm = busservo_board.robot(
+    bus, {"j%d" % i: bm.Joint(i, limits=(-60, 60), dps=DPS) for i in range(1, 7)}
+)
+print("the servos are at", bus.read_positions([arm.joints[n].servo_id for n in arm.names]))
 print("this homes them to 0 degrees at 30 degrees/s, then streams a sine wave for 3 s")
 if not I_HAVE_CHECKED_MY_ROBOT:
     print("nothing moved: check, then set I_HAVE_CHECKED_MY_ROBOT = True (top of this file)")
     raise SystemExit
-arm = bm.Robot(bus, {"j%d" % i: bm.Joint(i, limits=(-60, 60), dps=DPS) for i in range(1, 7)})
+n = len(arm.names)
+limit = 9600 / 10 / (3 * n + 7)  # a frame of n servos is 3n + 7 bytes of 10 bits
 print("homing: to 0 degrees at 30 degrees/s")
 time.sleep_ms(arm.home(dps=30))
 
@@ -51,7 +47,10 @@ while time.ticks_diff(time.ticks_ms(), start) < SECONDS * 1000:
         pass
     if time.ticks_diff(time.ticks_ms(), second) >= 1000:
         second = time.ticks_add(second, 1000)
-        print("%d updates/s (the wire's limit for 6 servos: 38.4)" % (arm.updates - counted))
+        print(
+            "%d updates/s (the wire's limit for %d servos: %.1f)"
+            % (arm.updates - counted, n, limit)
+        )
         counted = arm.updates
         print("  ", {name: round(targets[name], 1) for name in arm.names})
     time.sleep_ms(10)

@@ -15,37 +15,22 @@
 #   sh boards/unix.sh examples/teach.py     # unix port, simulated controller
 import time
 
-import busservo
+import busservo_board
 import busservo_motion as bm
 
 # Set True once you hold the arm (limp, it falls) and servos 1..4 can turn freely.
 I_HAVE_CHECKED_MY_ROBOT = False
 DPS: int | None = 30  # on a real robot no joint turns faster (degrees a second)
 
-try:
-    from board import uart  # your board file: boards/<port>.py, copied as board.py
-
-    SIMULATED = False
-except ImportError as e:
-    if "'board'" not in str(e):
-        raise  # board.py is there but fails to import: its error, not the simulator
-    from busservo_sim import uart
-
-    print("no board.py found: using the simulated controller, nothing real moves")
-    SIMULATED = I_HAVE_CHECKED_MY_ROBOT = True  # nothing real to check
+bus = busservo_board.bus()  # board.py's UART, or the simulated controller
+if busservo_board.simulated:
+    I_HAVE_CHECKED_MY_ROBOT = True  # nothing real to check
     DPS = None  # nor to hurt: full speed
 
 PATH = "teach.json"
 MS = 1000  # to go from one pose to the next, in playback
-port = uart()
-print("talking to", port)
-bus = busservo.BusServo(port)
-print("the servos are at", bus.read_positions([1, 2, 3, 4]))
-print("this lets them go limp, captures the poses you make by hand, then plays them back")
-if not I_HAVE_CHECKED_MY_ROBOT:
-    print("nothing moved: check, then set I_HAVE_CHECKED_MY_ROBOT = True (top of this file)")
-    raise SystemExit
-arm = bm.Robot(
+# Your calibration (robot.json, if you saved one), or these joints.
+arm = busservo_board.robot(
     bus,
     {
         "base": bm.Joint(1, dps=DPS),
@@ -54,6 +39,11 @@ arm = bm.Robot(
         "claw": bm.Joint(4, limits=(0, 60), dps=DPS),
     },
 )
+print("the servos are at", bus.read_positions([arm.joints[n].servo_id for n in arm.names]))
+print("this lets them go limp, captures the poses you make by hand, then plays them back")
+if not I_HAVE_CHECKED_MY_ROBOT:
+    print("nothing moved: check, then set I_HAVE_CHECKED_MY_ROBOT = True (top of this file)")
+    raise SystemExit
 # On the simulator, these stand for the hands that pose the robot.
 HANDS = [
     {"base": 0, "shoulder": 0, "elbow": 0, "claw": 0},
@@ -93,10 +83,11 @@ sequence = bm.Sequence()
 arm.limp()
 print("the joints are limp: pose the robot by hand")
 for n in range(1, 21):
-    if SIMULATED:
+    if busservo_board.simulated:
         if n > len(HANDS):
             break
-        arm.move(HANDS[n - 1], ms=0)  # the simulator's "hands"
+        hands = {name: d for name, d in HANDS[n - 1].items() if name in arm.joints}
+        arm.move(hands, ms=0)  # the simulator's "hands"
         arm.limp()
     elif not ask(n):
         break

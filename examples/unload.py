@@ -4,24 +4,15 @@
 #   mpremote run examples/unload.py
 import time
 
-import busservo
+import busservo_board
 
 # Set True once you hold your robot up (or it rests safely): limp servos hold up nothing.
 I_HAVE_CHECKED_MY_ROBOT = False
 
-try:
-    from board import uart  # your board file: boards/<port>.py, copied as board.py
-except ImportError as e:
-    if "'board'" not in str(e):
-        raise  # board.py is there but fails to import: its error, not the simulator
-    from busservo_sim import uart
-
-    print("no board.py found: using the simulated controller, nothing real moves")
+bus = busservo_board.bus()  # board.py's UART, or the simulated controller
+if busservo_board.simulated:
     I_HAVE_CHECKED_MY_ROBOT = True  # nothing real to check
 
-port = uart()
-print("talking to", port)
-bus = busservo.BusServo(port)
 SERVOS = [1, 2, 3, 4, 5, 6]
 print("servos 1..6 are at", sorted(bus.read_positions(SERVOS).items()))
 print("this lets them go limp: whatever they hold up falls")

@@ -20,7 +20,7 @@ import errno
 import os
 import sys
 
-import busservo
+import busservo_board
 import busservo_motion as bm
 import busservo_web
 
@@ -29,23 +29,10 @@ import busservo_web
 I_HAVE_CHECKED_MY_ROBOT = False
 DPS: int | None = 30  # on a real robot no joint turns faster (degrees a second)
 
-WIFI = None  # from board.py: (network name, password) to join, or None: an access point
-try:
-    from board import uart  # your board file: boards/<port>.py, copied as board.py
-
-    try:
-        from board import WIFI  # type: ignore[attr-defined, no-redef]
-    except ImportError:
-        pass
-    SIMULATED = False
-except ImportError as e:
-    if "'board'" not in str(e):
-        raise  # board.py is there but fails to import: its error, not the simulator
-    from busservo_sim import uart
-
-    print("no board.py found: using the simulated controller, nothing real moves")
-    SIMULATED = I_HAVE_CHECKED_MY_ROBOT = True  # nothing real to check
-    DPS = None  # nor to hurt: full speed
+try:  # board.py's (network name, password) to join; None: an access point
+    from board import WIFI  # type: ignore[attr-defined]
+except ImportError:  # no board.py (busservo_board.bus() says so), or no WIFI in it
+    WIFI = None
 
 UNIX = sys.platform in ("linux", "darwin")
 PASSWORD_FILE = "web_panel.txt"
@@ -127,24 +114,26 @@ def main():
     if len(key) < 8:
         print("--password wants 8 or more characters, got %d" % len(key))
         raise SystemExit(2)
-    serial = uart()
-    print("talking to", serial)
-    bus = busservo.BusServo(serial)
-    print("the servos are at", bus.read_positions([1, 2, 3, 4]))
+    bus = busservo_board.bus()  # board.py's UART, or the simulated controller
+    simulated = busservo_board.simulated  # nothing real to check, nor to hurt: full speed
+    dps = None if simulated else DPS
+    # Your calibration (robot.json, if you saved one), or these joints.
+    robot = busservo_board.robot(
+        bus,
+        {
+            "base": bm.Joint(1, dps=dps),
+            "shoulder": bm.Joint(2, limits=(-90, 90), dps=dps),
+            "elbow": bm.Joint(3, limits=(-90, 90), dps=dps),
+            "claw": bm.Joint(4, limits=(0, 60), dps=dps),
+        },
+    )
+    ids = [robot.joints[name].servo_id for name in robot.names]
+    print("the servos are at", bus.read_positions(ids))
     print("this serves a web page whose sliders move them, and whose STOP lets them go limp")
-    if not I_HAVE_CHECKED_MY_ROBOT:
+    if not (I_HAVE_CHECKED_MY_ROBOT or simulated):
         print("nothing moved: check, then set I_HAVE_CHECKED_MY_ROBOT = True (top of this file)")
         raise SystemExit
     address = "127.0.0.1" if UNIX else connect(key)
-    robot = bm.Robot(
-        bus,
-        {
-            "base": bm.Joint(1, dps=DPS),
-            "shoulder": bm.Joint(2, limits=(-90, 90), dps=DPS),
-            "elbow": bm.Joint(3, limits=(-90, 90), dps=DPS),
-            "claw": bm.Joint(4, limits=(0, 60), dps=DPS),
-        },
-    )
     robot.where()  # where the joints start (a joint with a dps limit needs it)
     try:
         asyncio.run(serve(robot, key, port, address))

@@ -49,7 +49,8 @@ class Mip(unittest.TestCase):
                 "%s -m mip install --target %s %s/package.json" % (MICROPYTHON, target, url)
             )
             self.assertTrue(ok, out)
-            self.assertEqual(os.listdir(target), ["busservo.py"])  # the driver alone
+            # The driver, and the examples' way to find board.py (or the simulator)
+            self.assertEqual(sorted(os.listdir(target)), ["busservo.py", "busservo_board.py"])
             # Optional modules are single files: mip install .../lib/busservo_sim.py
             ok, out = sh(
                 "%s -m mip install --target %s %s/lib/busservo_sim.py" % (MICROPYTHON, target, url)
@@ -297,7 +298,10 @@ class Manifest(unittest.TestCase):
     def test_package_json_names_files_that_exist(self):
         with open("package.json") as f:
             package = json.load(f)
-        self.assertEqual(package["urls"], [["busservo.py", "lib/busservo.py"]])
+        self.assertEqual(
+            package["urls"],
+            [["busservo.py", "lib/busservo.py"], ["busservo_board.py", "lib/busservo_board.py"]],
+        )
         for _, path in package["urls"]:
             os.stat(path)
 

@@ -8,11 +8,12 @@ import unittest
 
 import busservo
 import busservo_async
+import busservo_board
 import busservo_motion
 import busservo_sim
 import busservo_web
 
-MODULES = (busservo, busservo_async, busservo_sim, busservo_motion, busservo_web)
+MODULES = (busservo, busservo_async, busservo_board, busservo_sim, busservo_motion, busservo_web)
 
 # AsyncBusServo.__getattr__ forwards to its BusServo: its stub declares what it forwards, with
 # the signatures of BusServo's methods. {class: (the module, the class it forwards to)}

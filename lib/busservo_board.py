@@ -1,0 +1,51 @@
+# busservo_board: the bus and the robot, found the same way by every example.
+#
+#   import busservo_board
+#   bus = busservo_board.bus()               # board.py's UART, or the simulated controller
+#   arm = busservo_board.robot(bus, JOINTS)  # the calibration you saved, or these joints
+#
+# bus() is a BusServo on the uart() of your board.py (your port's file from boards/, copied
+# to the board as board.py), or, where there is no board.py, on the simulated controller
+# (lib/busservo_sim.py), which it says. A board.py that fails to import stops it with its own
+# error: only a missing one means the simulator. `simulated` says which it took.
+#
+# robot(bus, joints) is the Robot your calibration saved to CALIBRATION (robot.json, in the
+# folder the program runs from: a board's root), so that every example moves your arm within
+# the limits you found; without that file, a Robot of the joints the example gives.
+import errno
+
+import busservo
+
+CALIBRATION = "robot.json"  # Robot.save(CALIBRATION) writes it, Robot.load() reads it
+simulated = False  # True once bus() took the simulated controller
+
+
+def bus():
+    """A BusServo on board.py's uart(), or on the simulated controller without one."""
+    global simulated
+    try:
+        from board import uart  # your board file: boards/<port>.py, copied as board.py
+    except ImportError as e:
+        if "'board'" not in str(e):
+            raise  # board.py is there but fails to import: its error, not the simulator
+        from busservo_sim import uart
+
+        simulated = True
+        print("no board.py found: using the simulated controller, nothing real moves")
+    port = uart()
+    print("talking to", port)
+    return busservo.BusServo(port)
+
+
+def robot(bus, joints):
+    """The Robot saved to CALIBRATION, or with no such file, a Robot of joints on bus."""
+    import busservo_motion
+
+    try:
+        arm = busservo_motion.Robot.load(bus, CALIBRATION)
+    except OSError as e:
+        if e.args[0] != errno.ENOENT:
+            raise
+        return busservo_motion.Robot(bus, joints)  # no calibration saved: the example's
+    print("using the calibration in %s: joints %s" % (CALIBRATION, ", ".join(arm.names)))
+    return arm
