@@ -446,7 +446,7 @@ class UART:
         # from the heap, and this runs at every UART call.
         w = self._w
         w.clock.now_us += w.call_us
-        w.sync()
+        w._run_to(w.clock.now_us)
         if self._faults or self._hooks:
             return self._fault(method)
         return None
@@ -467,16 +467,16 @@ class UART:
         return after
 
     def _leave(self, after):
-        if after:
-            for callback in after:
-                callback()
+        for callback in after:
+            callback()
 
     # machine.UART's methods.
 
     def any(self):
         after = self._enter("any")
         n = self._any()
-        self._leave(after)
+        if after:
+            self._leave(after)
         return n
 
     def read(self, nbytes=None):
@@ -491,7 +491,8 @@ class UART:
             buf = bytearray(nbytes)
             n = self._io_read(buf, 0, nbytes)
             got = None if n is None else bytes(buf[:n])
-        self._leave(after)
+        if after:
+            self._leave(after)
         return got
 
     def readinto(self, buf, nbytes=None):
@@ -502,7 +503,8 @@ class UART:
         if nbytes is not None and 0 <= nbytes < n:
             n = nbytes
         got = self._io_read(buf, 0, n) if n else 0
-        self._leave(after)
+        if after:
+            self._leave(after)
         return got
 
     def write(self, buf, off=None, nbytes=None):
@@ -520,7 +522,8 @@ class UART:
             if 0 <= nbytes < size:
                 size = nbytes
         n = self._io_write(memoryview(buf)[start : start + size]) if size else 0
-        self._leave(after)
+        if after:
+            self._leave(after)
         return n
 
     def flush(self):
@@ -528,12 +531,14 @@ class UART:
         w = self._w
         if not w._wait(self._txdone, w._t + self._flush_us()):
             raise OSError(110)  # ETIMEDOUT
-        self._leave(after)
+        if after:
+            self._leave(after)
 
     def txdone(self):
         after = self._enter("txdone")
         done = self._txdone()
-        self._leave(after)
+        if after:
+            self._leave(after)
         return done
 
     def _readall(self):
@@ -570,7 +575,8 @@ class _RP2(UART):
         self._rt_at = None
 
     def _any(self):
-        self._drain_rx(33)
+        if self._rx_fifo.n:
+            self._drain_rx(33)
         return self._rx_ring.n
 
     def _drain_rx(self, most):
@@ -1117,7 +1123,8 @@ class World:
             self._tx_done(t)
         if self._rx_busy and self._rx_end == t:
             self._rx_done(t)
-        self._rx_kick(t)
+        if self._rx_queue and not self._rx_busy:
+            self._rx_kick(t)
         u = self.uart._rx_timer()
         if u is not None and u <= t:
             self.uart._rx_timer_fire(t)
@@ -1139,8 +1146,11 @@ class World:
         # A byte's last bit is in: the controller has it.
         self._tx_busy = False
         b = self._tx_byte
-        self._got.add(b)
-        self._got_at.add(t)
+        got = self._got
+        k = got.total
+        got.items[k % KEEP_BYTES] = b  # got.add(b) and _got_at.add(t), at a byte's cost
+        self._got_at.items[k % KEEP_LOG] = t
+        got.total = self._got_at.total = k + 1
         self._one[0] = b
         self._sim.write(self._one, 1)
         n = self._partn
@@ -1260,6 +1270,9 @@ class World:
     def _rx_done(self, t):
         self._rx_busy = False
         b = self._rx_byte
-        self._pin.add(b)
-        self._pin_at.add(t)
+        pin = self._pin
+        k = pin.total
+        pin.items[k % KEEP_LOG] = b
+        self._pin_at.items[k % KEEP_LOG] = t
+        pin.total = self._pin_at.total = k + 1
         self.uart._rx_arrive(t, b)
