@@ -19,9 +19,9 @@
 #   6.1-120 s it is hidden: it says nothing, and the panel reads the positions every 3 s
 # and every 10 minutes it is reloaded (a new login: the panel keeps 4 sessions). So the
 # wire is busy 6 s in 120 and nearly idle between, and the panel's loop runs every 10 ms
-# throughout. A day of the page open all the time would take ten minutes to run (the
-# page's requests, and each arming's and halt's read, spinning on the wire byte by byte);
-# this takes a minute or two. The clock starts so that the ticks_ms counter wraps at hour
+# throughout. A day of the page open all the time would take a quarter of an hour to run
+# (the page's requests, and each arming's and halt's read spinning on the wire byte by
+# byte); this takes a minute or two. The clock starts so that the ticks_ms counter wraps at hour
 # 12 (ticks_us wraps every 18 minutes).
 #
 # At the start of every hour from 1 to 24 (between bursts): the heap after gc.collect(),
