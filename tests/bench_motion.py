@@ -115,7 +115,7 @@ def match(pairs, starts, first, tol):
 
 def measure(port, n, way, seconds=SECONDS):
     """One case: a dict of its figures (see the top of this file)."""
-    w = wire.World(port)
+    w = wire.World(port, keep=seconds * 100 + 100)  # every frame: 96 a second at most
     # The driver's clock is the world's; the motion module's too, if it has one of its own.
     saved = busservo.time, getattr(bm, "time", None)
     busservo.time = w.clock
@@ -161,7 +161,6 @@ def measure(port, n, way, seconds=SECONDS):
     for k, (got, at) in poses.items():
         if len(got) == n and at <= end:
             ages.append(at - starts[k])
-    _, garbage, rest = wire.parse(w.received())
     return {
         "port": port,
         "n": n,
@@ -178,7 +177,7 @@ def measure(port, n, way, seconds=SECONDS):
         "age_min_ms": min(ages) / 1000 if ages else None,
         "blocked_mean_ms": sum(blocked) / len(blocked) / 1000,
         "blocked_max_ms": max(blocked) / 1000,
-        "lost": len(garbage) + len(rest) + w.tx_pending(),
+        "lost": w.garbled + len(w.rest()) + w.tx_pending(),
         "beeps": w.sim.beeps,
         "errors": errors,
         "overrun": w.overrun,

@@ -102,14 +102,14 @@ def latency(joints, samples):
         asyncio.create_task(page(token, stop))
         for k in range(samples):
             degrees = 10 + 3 * k % 50  # a new target each time
-            seen = len(world.arrivals())
+            seen = world.frames_total
             start = world.clock.now_us
             await http(
                 port, "POST", "/api/target", {"targets": {n: degrees for n in names}}, token
             )
             want = {robot.joints[n].servo_id: robot.joints[n].position(degrees) for n in names}
             while True:
-                frames = world.arrivals()[seen:]
+                frames = world.arrivals(seen)
                 hit = [
                     us for us, f in frames if f[3] == busservo.CMD_SERVO_MOVE and carries(f, want)
                 ]

@@ -623,14 +623,15 @@ def busservo_web_playing(robot):
     return _panels[-1].player if _panels else None
 
 
-# The panels serve() makes, seen by the tests through Panel's own state.
+# The last panel serve() made, seen by the tests through Panel's own state (the last
+# only: a panel holds its robot and world, which would all be kept to the end).
 _panels = []
 _Panel_init = busservo_web.Panel.__init__
 
 
 def _init(self, *args):
     _Panel_init(self, *args)
-    _panels.append(self)
+    _panels[:] = [self]
 
 
 busservo_web.Panel.__init__ = _init

@@ -3,6 +3,7 @@
 # does what it says. Driven by hand with the protocol document's own frames;
 # no driver involved.
 import asyncio
+import gc
 import unittest
 
 import wire
@@ -549,6 +550,78 @@ class Observations(unittest.TestCase):
         self.assertTrue(10421 < asyncio.run(main()) < 11100)
         self.assertEqual(ran, [1010])  # in the first sleep: write, any(), then 1 ms
         self.assertEqual(w.uart.read(6), BATTERY_7500)
+
+
+class Keeping(unittest.TestCase):
+    # What the world keeps is bounded, so that it can run for days (test_soak.py).
+
+    def test_it_keeps_the_last_frames_and_bytes_and_counts_them_all(self):
+        for port in wire.PORTS:
+            w = world(port, keep=3)
+            for _ in range(5):
+                w.uart.write(b"\x00" + GET_BATTERY)  # a byte of noise, then a frame
+                w.run_ms(10)
+            w.run_ms(10)  # the last reply too
+            self.assertEqual(w.frames_total, 5, port)
+            self.assertEqual(w.frames(), [GET_BATTERY] * 3, port)
+            self.assertEqual(w.frames(3), [GET_BATTERY] * 2, port)  # from the 4th on
+            self.assertEqual(w.frames(5), [], port)
+            self.assertEqual([f for _, f in w.arrivals()], w.frames(), port)
+            self.assertEqual(w.arrivals(4), [(40025 + wire_us(5), GET_BATTERY)], port)  # 5th write
+            self.assertEqual((w.garbled, w.garbage()), (5, bytes(5)), port)
+            self.assertEqual(w.received_total, 25, port)
+            self.assertEqual(w.arrived_total, 30, port)  # the five replies
+            w = world(port, keep=2000)
+            for _ in range(1700):  # 17000 bytes: more than it keeps of them
+                w.uart.write(MOVE_1_TO_800)
+                w.run_ms(11)
+            self.assertEqual(w.received_total, 17000, port)
+            self.assertEqual(wire.KEEP_BYTES, 16384)
+            self.assertEqual(w.received(), MOVE_1_TO_800[6:] + MOVE_1_TO_800 * 1638, port)
+            self.assertEqual(len(w.sent_at), wire.KEEP_LOG, port)
+            self.assertEqual(w.sent_at[-1], w.arrivals()[-1][0], port)
+            self.assertEqual(w.frames_total, 1700, port)
+            self.assertEqual(w.frames(), [MOVE_1_TO_800] * 1638, port)  # whose bytes it has
+
+    def test_frames_are_parsed_as_the_bytes_come_as_parse_has_them(self):
+        # Noise, frames, frames cut short and frames' starts mixed, a byte at a time.
+        pieces = (b"\x55", b"\x55\x55", b"\x00", STOP, MOVE_1_TO_800, STOP[:3], UNLOAD_1_2_3)
+        pieces += (READ_1_TO_6, SIM_SILENT, b"\x55\x55\x55\x05", RUN_8_ONCE, RUN_8_ONCE[:5])
+        data = bytearray()
+        seed = 7
+        for _ in range(400):
+            seed = (seed * 1103515245 + 12345) & 0x7FFFFFFF
+            data += pieces[seed % len(pieces)]
+        w = world("rp2", keep=100)
+        seen = []
+        w.on_frame = lambda us, frame: seen.append((us, frame))
+        w.sim.silent = True  # its replies have nothing to do here
+        for i in range(0, len(data), 200):
+            w.uart.write(data[i : i + 200])
+            w.run_ms(220)
+        frames, garbage, rest = wire.parse(data)
+        self.assertTrue(len(frames) > 150 and len(garbage) > 500, (len(frames), len(garbage)))
+        self.assertEqual(w.frames_total, len(frames))
+        self.assertEqual(w.frames(), frames[-100:])
+        self.assertEqual((w.garbled, w.garbage()), (len(garbage), garbage[-wire.KEEP_LOG :]))
+        self.assertEqual(w.rest(), rest)
+        self.assertEqual(seen[-100:], w.arrivals())
+
+    def test_what_it_keeps_does_not_grow_with_traffic(self):
+        # A minute of queries and moves, then another: the heap is where it was.
+        for port in wire.PORTS:
+            w = world(port)
+            for minute in range(2):
+                for _ in range(600):
+                    w.uart.write(GET_BATTERY)
+                    w.uart.write(MOVE_1_TO_800)
+                    w.run_ms(100)
+                    w.uart.read()
+                gc.collect()
+                if minute == 0:
+                    before = gc.mem_alloc()
+            grew = gc.mem_alloc() - before
+            self.assertTrue(grew < 1024, (port, grew))
 
 
 if __name__ == "__main__":

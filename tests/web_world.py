@@ -35,24 +35,49 @@ def robot(world):
     )
 
 
+class Moves:
+    """A world's on_frame: counts the CMD_SERVO_MOVE frames the controller took and
+    keeps the last MOVES of them, so that a probe costs the same after hours."""
+
+    MOVES = 20
+
+    def __init__(self):
+        self.count = 0
+        self._last = [None] * self.MOVES
+
+    def __call__(self, us, frame):
+        if frame[3] == busservo.CMD_SERVO_MOVE:
+            self._last[self.count % self.MOVES] = frame
+            self.count += 1
+
+    def last(self):
+        """The last MOVES moves, oldest first, as [time_ms, {id: position}]."""
+        n = self.count
+        frames = [self._last[i % self.MOVES] for i in range(max(0, n - self.MOVES), n)]
+        return [
+            [f[5] | f[6] << 8, {f[i]: f[i + 1] | f[i + 2] << 8 for i in range(7, len(f), 3)}]
+            for f in frames
+        ]
+
+
 def live(port="rp2"):
-    """A world on real time: its clock, UART, line and controller."""
-    return wire.World(port, clock=wire.RealClock(), call_us=0, cost_us=0)
+    """A world on real time: its clock, UART, line and controller; its on_frame
+    counts the moves (Moves)."""
+    world = wire.World(port, clock=wire.RealClock(), call_us=0, cost_us=0)
+    world.on_frame = Moves()
+    return world
 
 
 def controller(world):
     """What the controller knows: {"at": {id: position}, "limp": [ids], "moved": how many
     CMD_SERVO_MOVE it took, "moves": the last 20 of them as [time_ms, {id: position}]}."""
     sim = world.sim
-    moves = [f for f in world.frames() if f[3] == busservo.CMD_SERVO_MOVE]
+    moves = world.on_frame
     return {
         "at": {i: sim.position(i) for i in (1, 2, 3, 4)},
         "limp": sorted(sim.limp),
-        "moved": len(moves),
-        "moves": [
-            [f[5] | f[6] << 8, {f[i]: f[i + 1] | f[i + 2] << 8 for i in range(7, len(f), 3)}]
-            for f in moves[-20:]
-        ],
+        "moved": moves.count,
+        "moves": moves.last(),
     }
 
 

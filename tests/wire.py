@@ -8,6 +8,8 @@
 #   w.clock.advance_ms(20)           # time passes; the wire catches up when looked at
 #   w.frames(), w.garbled            # what the controller received
 #   w.arrivals()                     # (us, frame): when each frame was in
+#   w.frames_total, w.frames(first)  # how many came; those from the first-th on
+#   w.on_frame = f                   # f(us, frame) as each whole frame is in
 #   w.noise(b"\x55\x55\x05")         # faults: noise, drop, cut_reply, late,
 #   w.uart.fail("readinto", OSError(5)), w.uart.during(...), w.uart.stall(True)
 #   wire.World("rp2", clock=wire.RealClock(), call_us=0)   # the same, live, on real time
@@ -18,6 +20,17 @@
 # call that waits (as a port's does) moves the clock to where the wait ends.
 # The wire is lazy: whatever a UART call or a World method looks at, the wire
 # is first brought up to the clock, event by event in time order.
+#
+# Nothing grows with traffic, so a world can run for days: it keeps the last
+# KEEP_BYTES bytes the controller received (received()) and of them the last
+# KEEP whole frames (keep=), with their times; the times of the last KEEP_LOG
+# bytes received (sent_at), the last KEEP_LOG garbled ones (garbage()) and the
+# last KEEP_LOG that reached the board's pin (arrived); and it counts them all
+# (received_total, frames_total, garbled, arrived_total). Frames are parsed as
+# their bytes come, once. All that is kept is in buffers made with the world:
+# nothing it keeps is a small object of its own, scattered over the heap, where
+# it would leave no room for a large one. The queues of what is on its way (the
+# rings, what the controller says, the faults set) hold what is still to come.
 #
 # What the models do, as read in MicroPython's source:
 # - extmod/machine_uart.c binds UART.read, readinto and write to py/stream.c's
@@ -84,8 +97,10 @@
 #   World(..., hang="raise") raises wire.Hang there instead.
 # - The simulated controller answers at the instant the last bit of a frame is
 #   in, and speaks unprompted (COMPLETE) on a whole ms: it is looked at every ms
-#   while a group runs, and at every catch-up. Its clock is the world's ms,
-#   unwrapped: it does its ticks arithmetic with the unix port's time module.
+#   while a group runs, at each byte it receives, and at the catch-up after a
+#   test looked at it (w.sim: it may have been told something off the wire).
+#   Its clock is the world's ms, unwrapped: it does its ticks arithmetic with
+#   the unix port's time module.
 # - Faults act on what the controller says after they are set: a reply already
 #   on its way is not cut, dropped or delayed. cut_reply() acts before drop().
 import asyncio
@@ -106,6 +121,9 @@ _TICK_US = 10000  # a FreeRTOS tick on esp32 (100 Hz)
 # Length = per * count + extra, the count being the first parameter.
 _LENGTHS = {3: (3, 5), 6: 5, 7: 2, 11: 5, 15: 2, 20: (1, 3), 21: (1, 3)}
 METHODS = ("any", "read", "readinto", "write", "flush", "txdone")
+KEEP = 1000  # whole frames a world keeps, by default: 10 s of 10-byte moves
+KEEP_BYTES = 16384  # bytes received it keeps: 17 s of the wire at 9600 baud
+KEEP_LOG = 1024  # the times of the bytes received, the garbled ones, those at the pin
 
 
 class Hang(Exception):
@@ -208,6 +226,39 @@ class _Ring:
 
     def clear(self):
         self.i = self.n = 0
+
+
+class _Log:
+    # The last len(items) things of a kind, in items (a list, or a bytearray for
+    # bytes), made once: adding one overwrites the oldest. total counts them all.
+    def __init__(self, items):
+        self.items = items
+        self.total = 0
+
+    def add(self, x):
+        items = self.items
+        items[self.total % len(items)] = x
+        self.total += 1
+
+    def last(self, first=0):
+        # Those kept, oldest first, from the first-th of all on (a list, or bytes).
+        return self.span(first, self.total)
+
+    def span(self, first, end):
+        # Those kept of the first-th to the one before the end-th.
+        items = self.items
+        size = len(items)
+        first = max(first, self.total - size, 0)
+        end = min(end, self.total)
+        if first >= end:
+            return [] if isinstance(items, list) else b""
+        i = first % size
+        j = i + end - first
+        if j <= size:
+            out = items[i:j]
+        else:
+            out = items[i:] + items[: j - size]
+        return out if isinstance(items, list) else bytes(out)
 
 
 class _ItemRing:
@@ -372,8 +423,12 @@ class UART:
             raise ValueError("method must be one of %s, got %r" % (METHODS, method))
 
     @staticmethod
-    def _due(entries):
-        # Count one call against each entry; the entries that fire on it.
+    def _due(table, method):
+        # Count one call against each entry of table[method]; the entries that
+        # fire on it. Spent entries go, and a method left with none.
+        entries = table.get(method)
+        if not entries:
+            return ()
         fired = []
         for e in entries:
             if e[0] > 0:
@@ -382,22 +437,28 @@ class UART:
                 e[1] -= 1
                 fired.append(e)
         entries[:] = [e for e in entries if e[1] > 0]
+        if not entries:
+            del table[method]
         return fired
 
     def _enter(self, method):
+        # Kept small: a MicroPython function with many locals takes its frame
+        # from the heap, and this runs at every UART call.
         w = self._w
         w.clock.now_us += w.call_us
-        w.sync()
-        faults = self._faults.get(method)
-        if faults:
-            fired = self._due(faults)
-            if fired:
-                raise fired[0][2]
-        hooks = self._hooks.get(method)
-        if not hooks:
-            return None
+        w._run_to(w.clock.now_us)
+        if self._faults or self._hooks:
+            return self._fault(method)
+        return None
+
+    def _fault(self, method):
+        # The faults and callbacks set on this call of method.
+        w = self._w
+        fired = self._due(self._faults, method)
+        if fired:
+            raise fired[0][2]
         after = []
-        for e in self._due(hooks):
+        for e in self._due(self._hooks, method):
             if e[3] == "before":
                 e[2]()
                 w.sync()
@@ -406,16 +467,16 @@ class UART:
         return after
 
     def _leave(self, after):
-        if after:
-            for callback in after:
-                callback()
+        for callback in after:
+            callback()
 
     # machine.UART's methods.
 
     def any(self):
         after = self._enter("any")
         n = self._any()
-        self._leave(after)
+        if after:
+            self._leave(after)
         return n
 
     def read(self, nbytes=None):
@@ -430,7 +491,8 @@ class UART:
             buf = bytearray(nbytes)
             n = self._io_read(buf, 0, nbytes)
             got = None if n is None else bytes(buf[:n])
-        self._leave(after)
+        if after:
+            self._leave(after)
         return got
 
     def readinto(self, buf, nbytes=None):
@@ -441,7 +503,8 @@ class UART:
         if nbytes is not None and 0 <= nbytes < n:
             n = nbytes
         got = self._io_read(buf, 0, n) if n else 0
-        self._leave(after)
+        if after:
+            self._leave(after)
         return got
 
     def write(self, buf, off=None, nbytes=None):
@@ -459,7 +522,8 @@ class UART:
             if 0 <= nbytes < size:
                 size = nbytes
         n = self._io_write(memoryview(buf)[start : start + size]) if size else 0
-        self._leave(after)
+        if after:
+            self._leave(after)
         return n
 
     def flush(self):
@@ -467,12 +531,14 @@ class UART:
         w = self._w
         if not w._wait(self._txdone, w._t + self._flush_us()):
             raise OSError(110)  # ETIMEDOUT
-        self._leave(after)
+        if after:
+            self._leave(after)
 
     def txdone(self):
         after = self._enter("txdone")
         done = self._txdone()
-        self._leave(after)
+        if after:
+            self._leave(after)
         return done
 
     def _readall(self):
@@ -509,7 +575,8 @@ class _RP2(UART):
         self._rt_at = None
 
     def _any(self):
-        self._drain_rx(33)
+        if self._rx_fifo.n:
+            self._drain_rx(33)
         return self._rx_ring.n
 
     def _drain_rx(self, most):
@@ -663,14 +730,14 @@ class _ESP32(UART):
     def _isr_rx(self):
         fifo, ring = self._rx_fifo, self._rx_ring
         self._tout_at = None
+        if ring.cap - ring.n >= fifo.n:
+            while fifo.n:
+                ring.put(fifo.get())
+            return
         data = bytearray(fifo.n)
         for i in range(len(data)):
             data[i] = fifo.get()
-        if ring.cap - ring.n >= len(data):
-            for b in data:
-                ring.put(b)
-        else:
-            self._stash = data
+        self._stash = data
 
     def _check_buf_full(self):
         # After a read: the stash into the ring, if it fits now; RX interrupts
@@ -787,8 +854,8 @@ class _ESP32(UART):
 
 class World:
     """A board's UART (w.uart), the wire, and a SimController (w.sim) at its far
-    end, all on w.clock. Keyword arguments beyond the UART's go to the
-    SimController (groups=, battery=)."""
+    end, all on w.clock. keep: how many whole frames it keeps. Keyword arguments
+    beyond the UART's go to the SimController (groups=, battery=)."""
 
     def __init__(
         self,
@@ -804,6 +871,7 @@ class World:
         hang_ms=1000,
         hang="return",
         clock=None,
+        keep=KEEP,
         **sim,
     ):
         if port not in PORTS:
@@ -823,16 +891,30 @@ class World:
         self._rx_end = 0
         self._rx_byte = 0
         self._rx_queue = []  # [not before, bytearray, next index, noise?], in order
-        self._received = bytearray()
-        self.sent_at = []  # when each byte the controller received had arrived
-        self.arrived = []  # (us, byte) of each byte that reached the board's pin
         self._drops = []  # [skip, n]
         self._cuts = []  # keep, one a frame
         self._lates = []  # [ms, count]
+        # What the controller received, and when each byte was in; the frames in
+        # it, parsed as the bytes come: _part holds the start of one still coming,
+        # and is looked at again once it holds _need bytes.
+        self._got = _Log(bytearray(KEEP_BYTES))
+        self._got_at = _Log([0] * KEEP_LOG)
+        self._junk = _Log(bytearray(KEEP_LOG))
+        self._starts = _Log([0] * keep)  # where each frame starts in _got (its count)
+        self._frame_at = _Log([0] * keep)
+        self._part = bytearray(260)  # a frame is 257 bytes at most
+        self._partn = 0
+        self._need = 1
+        self.on_frame = None  # called (us, frame) as each whole frame is in
+        # What reached the board's pin.
+        self._pin = _Log(bytearray(KEEP_LOG))
+        self._pin_at = _Log([0] * KEEP_LOG)
         self._one = bytearray(1)
         self._sim = busservo_sim.SimController(ticks_ms=self._sim_ms, baudrate=None, **sim)
+        self._says = hasattr(self._sim, "running")  # else: look at it every ms
         self._sim_active = False  # a group runs: look at the controller every ms
         self._poll_at = 0
+        self._looked = False  # w.sim was looked at: it may have been told something
         cls = _RP2 if port == "rp2" else _ESP32
         self.uart = cls(self, timeout, timeout_char, txbuf, rxbuf, hang_ms, hang)
 
@@ -840,6 +922,7 @@ class World:
     def sim(self):
         """The controller, with the wire brought up to now."""
         self.sync()
+        self._looked = True  # what it is told off the wire is collected at the next sync
         return self._sim
 
     def _sim_ms(self):
@@ -850,33 +933,74 @@ class World:
     # Observations.
 
     def received(self):
-        """Every byte the controller has received."""
+        """The bytes the controller has received (the last KEEP_BYTES)."""
         self.sync()
-        return bytes(self._received)
+        return self._got.last()
 
-    def frames(self):
-        """The whole frames the controller received, by the protocol's lengths."""
+    @property
+    def sent_at(self):
+        """When each of the last KEEP_LOG bytes received had arrived, in us."""
         self.sync()
-        return parse(self._received)[0]
+        return self._got_at.last()
 
-    def arrivals(self):
-        """(us, frame) of each whole frame the controller received, in order:
-        us is when its last byte had arrived, so when the controller had it."""
+    @property
+    def received_total(self):
+        """How many bytes the controller has received."""
         self.sync()
-        ends = []
-        frames = parse(self._received, ends)[0]
-        return [(self.sent_at[end - 1], frame) for end, frame in zip(ends, frames)]
+        return self._got.total
+
+    def frames(self, first=0):
+        """The whole frames the controller received, by the protocol's lengths:
+        the last keep of them (of those in the bytes kept), or those kept from
+        the first-th on (counting from 0, as frames_total does)."""
+        return [frame for _, frame in self.arrivals(first)]
+
+    def arrivals(self, first=0):
+        """(us, frame) of each whole frame of frames(first), in order: us is when
+        its last byte had arrived, so when the controller had it."""
+        self.sync()
+        got = self._got
+        gone = got.total - len(got.items)  # bytes no longer kept
+        out = []
+        for start, at in zip(self._starts.last(first), self._frame_at.last(first)):
+            if start >= gone:
+                size = got.items[(start + 2) % len(got.items)] + 2  # its Length byte
+                out.append((at, got.span(start, start + size)))
+        return out
+
+    @property
+    def frames_total(self):
+        """How many whole frames the controller has received."""
+        self.sync()
+        return self._starts.total
 
     @property
     def garbled(self):
         """How many bytes the controller received formed no frame."""
         self.sync()
-        return len(parse(self._received)[1])
+        return self._junk.total
 
     def garbage(self):
-        """The bytes the controller received that formed no frame."""
+        """The bytes the controller received that formed no frame (the last KEEP_LOG)."""
         self.sync()
-        return parse(self._received)[1]
+        return self._junk.last()
+
+    def rest(self):
+        """The start of a frame the controller is receiving (or that was cut)."""
+        self.sync()
+        return bytes(self._part[: self._partn])
+
+    @property
+    def arrived(self):
+        """(us, byte) of each byte that reached the board's pin (the last KEEP_LOG)."""
+        self.sync()
+        return list(zip(self._pin_at.last(), self._pin.last()))
+
+    @property
+    def arrived_total(self):
+        """How many bytes reached the board's pin."""
+        self.sync()
+        return self._pin.total
 
     def tx_backlog_us(self):
         """How long until the board's transmit side is empty (None: stalled)."""
@@ -982,7 +1106,9 @@ class World:
         return t
 
     def _run_to(self, target):
-        self._collect(self._t)  # what it was told off the wire (w.sim.write()) says
+        if self._looked:
+            self._looked = False
+            self._collect(self._t)  # what it was told off the wire (w.sim.write()) says
         while True:
             t = self._next()
             if t is None or t > target:
@@ -997,7 +1123,8 @@ class World:
             self._tx_done(t)
         if self._rx_busy and self._rx_end == t:
             self._rx_done(t)
-        self._rx_kick(t)
+        if self._rx_queue and not self._rx_busy:
+            self._rx_kick(t)
         u = self.uart._rx_timer()
         if u is not None and u <= t:
             self.uart._rx_timer_fire(t)
@@ -1019,22 +1146,73 @@ class World:
         # A byte's last bit is in: the controller has it.
         self._tx_busy = False
         b = self._tx_byte
-        self._received.append(b)
-        self.sent_at.append(t)
+        got = self._got
+        k = got.total
+        got.items[k % KEEP_BYTES] = b  # got.add(b) and _got_at.add(t), at a byte's cost
+        self._got_at.items[k % KEEP_LOG] = t
+        got.total = self._got_at.total = k + 1
         self._one[0] = b
         self._sim.write(self._one, 1)
+        n = self._partn
+        self._part[n] = b
+        self._partn = n + 1
+        if n + 1 >= self._need:
+            self._parse(t)
         self._collect(t)
         self._tx_kick()
+
+    def _parse(self, t):
+        # What the bytes in _part are, as parse() has it, byte by byte: noise, a
+        # whole frame, or the start of one (then _need: when to look again).
+        p = self._part
+        n = self._partn
+        while n:
+            noise = p[0] != 0x55 or (n > 1 and p[1] != 0x55)
+            if not noise:
+                if n < 4:
+                    self._need = 2 if n < 2 else 4
+                    break
+                length = p[2]
+                want = _LENGTHS.get(p[3])
+                if isinstance(want, tuple):
+                    if n < 5:
+                        self._need = 5
+                        break
+                    want = want[0] * p[4] + want[1]
+                noise = want != length
+                if not noise:
+                    if n < length + 2:
+                        self._need = length + 2
+                        break
+                    self._whole(t, length + 2, n)
+                    n = self._shift(length + 2, n)
+                    continue
+            self._junk.add(p[0])
+            n = self._shift(1, n)
+        else:
+            self._need = 1
+        self._partn = n
+
+    def _shift(self, k, n):
+        # The first k of n bytes in _part have been taken: the rest to its front.
+        p = self._part
+        for i in range(n - k):
+            p[i] = p[k + i]
+        return n - k
+
+    def _whole(self, t, size, n):
+        # A whole frame: the first size of the n bytes in _part.
+        self._starts.add(self._got.total - n)
+        self._frame_at.add(t)
+        if self.on_frame is not None:
+            self.on_frame(t, bytes(self._part[:size]))
 
     def _collect(self, t):
         # What the controller says goes onto the line to the board.
         sim = self._sim
         if sim.any():
             self._said(t, sim.read())
-        try:
-            active = sim.running is not None
-        except AttributeError:  # a controller that does not say: look every ms
-            active = True
+        active = sim.running is not None if self._says else True
         if active and not self._sim_active:
             self._poll_at = (t // 1000 + 1) * 1000
         self._sim_active = active
@@ -1092,5 +1270,9 @@ class World:
     def _rx_done(self, t):
         self._rx_busy = False
         b = self._rx_byte
-        self.arrived.append((t, b))
+        pin = self._pin
+        k = pin.total
+        pin.items[k % KEEP_LOG] = b
+        self._pin_at.items[k % KEEP_LOG] = t
+        pin.total = self._pin_at.total = k + 1
         self.uart._rx_arrive(t, b)
