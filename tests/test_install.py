@@ -151,10 +151,10 @@ class Mpremote(unittest.TestCase):
         stop(self.repl)
         sh("rm -rf %s %s.log %s" % (self.device, self.device, self.pty))
 
-    def readme_commands(self):
-        # The README's own mpremote commands that copy from lib/ and run examples/ (but the
-        # web panel, which serves until Ctrl-C: test_examples.py runs it).
-        with open("README.md") as f:
+    def page_commands(self, page):
+        # A page's own mpremote commands that copy from lib/ and run examples/, in its order
+        # (but the web panel, which serves until Ctrl-C: test_examples.py runs it).
+        with open(page) as f:
             lines = [line.split("#")[0].strip() for line in f]
         return [
             line[len("mpremote ") :]
@@ -164,12 +164,35 @@ class Mpremote(unittest.TestCase):
             and line != "mpremote run examples/web_panel.py"
         ]
 
-    def test_the_readme_commands_copy_and_run_on_a_repl(self):
-        commands = self.readme_commands()
-        self.assertTrue(len(commands) >= 3, commands)
+    def run_commands(self, commands):
+        outs = []
         for command in commands:
             ok, out = sh(self.connect + command)
             self.assertTrue(ok, command + ": " + out)
+            outs.append(out)
+        return outs
+
+    def test_the_front_pages_five_steps_copy_and_run_on_a_repl(self):
+        # README.md's steps 2, 4 and 5. Step 3's board file opens a real board's UART: this
+        # "board" has none, so the simulated controller stands in for the controller.
+        commands = self.page_commands("README.md")
+        self.assertEqual(
+            commands,
+            [
+                "cp lib/busservo.py :busservo.py",
+                "run examples/check_wiring.py",
+                "run examples/demo.py",
+            ],
+        )
+        commands.insert(1, "cp lib/busservo_sim.py :busservo_sim.py")
+        outs = self.run_commands(commands)
+        self.assertIn("battery: 7.50 V", outs[2])
+        self.assertIn("action group 1 completed", outs[3])
+
+    def test_the_boards_pages_commands_copy_and_run_on_a_repl(self):
+        commands = self.page_commands("docs/boards.md")
+        self.assertTrue(len(commands) >= 3, commands)
+        self.run_commands(commands)
         ok, out = sh(self.connect + "exec 'import busservo; print(busservo.__file__)'")
         self.assertEqual(out.strip(), "busservo.py")  # the copy, not lib/
         self.assertTrue("busservo.py" in os.listdir(self.device))
