@@ -1,7 +1,9 @@
-# The documentation does what it says: the README's REPL session and its tour run on the unix
-# port as shown, its links lead somewhere, every example is listed, and the wiring pictures are
-# well-formed SVG, name the pins the board files use, and render (with resvg, which
-# tests/run.sh installs into .venv/; without it that test skips, saying so).
+# The documentation does what it says: the front page (README.md) stays short and leads to every
+# page of docs/; the code the pages show runs on the unix port as shown (the front page's
+# example, the REPL session, the tour, the motion layer's example); every link and #anchor leads
+# somewhere; every example is listed; and the wiring pictures are well-formed SVG, name the pins
+# the board files use, and render (with resvg, which tests/run.sh installs into .venv/; without
+# it that test skips, saying so).
 import os
 import struct
 import unittest
@@ -9,6 +11,9 @@ import unittest
 from shell import scratch, sh
 
 PYTHON = ".venv/bin/python"  # CPython, for the XML parser and the renderer
+FRONT = "README.md"
+FRONT_LINES = 120  # a screen or two
+PAGES = sorted("docs/" + name for name in os.listdir("docs") if name.endswith(".md"))
 PICTURES = {
     "boards/wiring-pico.svg": "boards/rp2.py",
     "boards/wiring-esp32.svg": "boards/esp32.py",
@@ -26,6 +31,39 @@ def block(text, heading, fence):
     i = lines.index(heading)
     start = lines.index(fence, i) + 1
     return lines[start : lines.index("```", start)]
+
+
+def outside_code(text):
+    """text's lines that are not in a code block (a fence may be indented, in a list item)."""
+    kept = []
+    fenced = False
+    for line in text.split("\n"):
+        if line.strip().startswith("```"):
+            fenced = not fenced
+        elif not fenced:
+            kept.append(line)
+    return kept
+
+
+def anchors(text):
+    """The anchors of text's headings."""
+    return [slug(line.lstrip("#").strip()) for line in outside_code(text) if line[:1] == "#"]
+
+
+def run(code, expect, folder=None):
+    """Run code with `sh boards/unix.sh`, from folder if given; what it printed, if it has
+    expect in it."""
+    script = scratch("doc") + ".py"
+    with open(script, "w") as f:
+        f.write(code)
+    try:
+        where = "cd %s && " % folder if folder else ""
+        ok, out = sh("%ssh %s/boards/unix.sh %s" % (where, os.getcwd(), script))
+    finally:
+        os.remove(script)
+    if not ok or expect not in out:
+        raise AssertionError("%r not printed:\n%s" % (expect, out))
+    return out
 
 
 def links(text):
@@ -66,12 +104,48 @@ def pins(board):
     return ["UART" + number, "GPIO" + tx + " TX", "GPIO" + rx + " RX"]
 
 
-class Readme(unittest.TestCase):
+class FrontPage(unittest.TestCase):
+    def test_it_fits_a_screen_or_two_and_leads_to_every_page(self):
+        text = read(FRONT)
+        self.assertTrue(text.count("\n") <= FRONT_LINES, "README.md: %d lines" % text.count("\n"))
+        self.assertTrue(len(PAGES) >= 8, PAGES)
+        for page in PAGES:
+            self.assertIn("](%s)" % page, text, "README.md links to " + page)
+            title = read(page).split("\n")[0]
+            self.assertTrue(title.startswith("# "), page + " opens with its title")
+
+    def test_its_example_runs_on_the_unix_port(self):
+        # As written: on the unix port there is no board.py, so the simulator answers.
+        code = block(read(FRONT), "## In a few lines", "```python")
+        self.assertTrue(len(code) <= 20, "a few lines, not %d" % len(code))
+        out = run("\n".join(code) + "\n", "7500\n{1: ")
+        self.assertIn(", 2: 500, 3: 500}", out)
+
+    def test_its_five_steps_come_in_order(self):
+        text = read(FRONT)
+        steps = text[text.index("## Your first board in five steps") :]
+        steps = steps[: steps.index("\n## ")]
+        at = [steps.index("\n%d. **" % n) for n in range(1, 6)]
+        self.assertEqual(at, sorted(at))
+        wires, install, board, check, demo = [
+            steps[start:end] for start, end in zip(at, at[1:] + [len(steps)])
+        ]
+        self.assertIn("wiring-pico.svg", wires)
+        self.assertIn("not 5 V tolerant", wires)
+        self.assertIn("mpremote mip install github:OWNER/busservo@v", install)
+        self.assertIn(":board.py", board)
+        self.assertIn("mpremote run examples/check_wiring.py", check)
+        self.assertIn("mpremote run examples/demo.py", demo)
+
+
+class Pages(unittest.TestCase):
     def test_the_repl_session_runs_as_shown(self):
         # Each ">>> " line is typed into `sh boards/unix.sh`'s REPL (-i -c "": the REPL, reading
         # a file as typed lines); what it prints after the banner is the block itself. A
         # traceback's "  ..." stands for its "  File" lines, which name lines of lib/.
-        shown = [line.rstrip() for line in block(read("README.md"), "## At the REPL", "```text")]
+        shown = [
+            line.rstrip() for line in block(read("docs/repl.md"), "## The session", "```text")
+        ]
         shown = shown[[line.startswith(">>> ") for line in shown].index(True) :]
         typed = scratch("typed")
         with open(typed, "w") as f:
@@ -97,53 +171,81 @@ class Readme(unittest.TestCase):
     def test_the_tour_runs_on_the_unix_port(self):
         # As written, with one change: its control loop, `while True:`, goes round 100 times
         # rather than for ever. On the unix port there is no board.py: the simulator answers.
-        tour = block(read("README.md"), "## A short tour", "```python")
+        tour = block(read("docs/driver.md"), "## A short tour", "```python")
         self.assertIn("while True:                             # a control loop", tour)
         code = "\n".join(tour).replace("while True:", "for _ in range(100):")
-        script = scratch("tour") + ".py"
-        with open(script, "w") as f:
-            f.write(code + '\nprint("tour done", bus.battery, sorted(bus.positions.items()))\n')
-        try:
-            ok, out = sh("sh boards/unix.sh " + script)
-        finally:
-            os.remove(script)
-        self.assertTrue(ok, out)
-        self.assertIn("tour done 7500 [(1, ", out)
+        code += '\nprint("tour done", bus.battery, sorted(bus.positions.items()))\n'
+        run(code, "tour done 7500 [(1, ")
 
-    def test_links_lead_somewhere(self):
-        for doc in ("README.md", "boards/README.md"):
+    def test_the_motion_layers_example_runs_on_the_simulator(self):
+        # Its uart() is board.py's; here the simulator's, told that servo 6 is a PWM servo, as
+        # the page says. It saves arm.json where it runs: in a folder of the test's own.
+        code = block(read("docs/motion.md"), "# Joints in degrees: the motion layer", "```python")
+        stand_in = (
+            "import busservo_sim\n\n\ndef uart():\n"
+            "    sim = busservo_sim.SimController()\n    sim.pwm.add(6)\n    return sim\n\n\n"
+        )
+        folder = scratch("motion")
+        os.mkdir(folder)
+        try:
+            out = run(
+                stand_in + "\n".join(code) + '\nprint("where", arm.where())\n', "where {", folder
+            )
+            self.assertEqual(os.listdir(folder), ["arm.json"])
+        finally:
+            sh("rm -rf " + folder)
+        for joint in ("base", "shoulder", "claw"):
+            self.assertIn("'%s': " % joint, out)
+
+    def test_links_and_anchors_lead_somewhere(self):
+        for doc in [FRONT] + PAGES + ["boards/README.md"]:
             text = read(doc)
             folder = doc.rpartition("/")[0]
-            anchors = [
-                slug(line.lstrip("#").strip()) for line in text.split("\n") if line[:1] == "#"
-            ]
+            own = anchors(text)
+            self.assertEqual(len(own), len(set(own)), doc + ": two headings, one anchor")
             for target in links(text):
                 if target.startswith("http"):
                     continue
-                if target.startswith("#"):
-                    self.assertIn(target[1:], anchors, doc + ": " + target)
-                    continue
-                path = (folder + "/" if folder else "") + target
-                try:
-                    os.stat(path)
-                except OSError:
-                    self.fail("%s links to %s, which is not there" % (doc, target))
+                path, _, anchor = target.partition("#")
+                if path:
+                    path = (folder + "/" if folder else "") + path
+                    try:
+                        os.stat(path)
+                    except OSError:
+                        self.fail("%s links to %s, which is not there" % (doc, target))
+                if anchor:
+                    heads = anchors(read(path)) if path else own
+                    self.assertIn(anchor, heads, doc + ": " + target)
 
     def test_every_example_is_listed(self):
-        text = read("README.md")
+        text = read("docs/basics.md")
         for name in os.listdir("examples"):
             if name.endswith(".py"):
-                self.assertIn("\n| `%s` | " % name, text, "the README's examples table")
+                self.assertIn("\n| `%s` | " % name, text, "docs/basics.md's examples table")
 
     def test_the_wiring_warns_of_5_v(self):
-        # (assertTrue, not assertIn: a failure names what is missing, not the whole README)
-        for doc in ("README.md", "boards/README.md"):
-            text = read(doc).replace("\n", " ")
+        # (assertTrue, not assertIn: a failure names what is missing, not the whole page)
+        for doc in (FRONT, "docs/boards.md", "boards/README.md"):
+            text = " ".join(read(doc).split())
             for words in ("not 5 V tolerant", "1 kΩ in series", "examples/check_wiring.py"):
                 self.assertTrue(words in text, "%s: no %r" % (doc, words))
-        text = read("README.md")
-        for symptom in ("`OSError: [Errno 110] ETIMEDOUT`", "`bus.noise` grows", "`OSError: [E"):
+        text = read("docs/troubleshooting.md")
+        for symptom in (
+            "`OSError: [Errno 110] ETIMEDOUT`",
+            "`bus.noise` grows",
+            "`OSError: [E",
+            "`mpremote: no device found`",
+        ):
             self.assertTrue("\n| " + symptom in text, "no troubleshooting row " + symptom)
+
+    def test_linux_asks_for_the_dialout_group(self):
+        # A USB-serial port opens only for its group's members: the front page says how to
+        # join, docs/boards.md also how to see the group.
+        for doc in (FRONT, "docs/boards.md"):
+            text = " ".join(read(doc).split())
+            for words in ("sudo usermod -aG dialout $USER", "log out and in"):
+                self.assertTrue(words in text, "%s: no %r" % (doc, words))
+        self.assertIn("ls -l /dev/ttyUSB0", read("docs/boards.md"))
 
 
 class Pictures(unittest.TestCase):
@@ -160,7 +262,7 @@ class Pictures(unittest.TestCase):
             text = read(svg)
             for name in pins(board):
                 self.assertIn(name, text, "%s names %s's pins" % (svg, board))
-            for doc in ("README.md", "boards/README.md"):
+            for doc in (FRONT, "docs/boards.md", "boards/README.md"):
                 self.assertIn(svg.rpartition("/")[2] + ")", read(doc), doc + " shows " + svg)
 
     def test_the_pin_table_matches_the_board_files(self):

@@ -152,10 +152,10 @@ class Mpremote(unittest.TestCase):
         stop(self.repl)
         sh("rm -rf %s %s.log %s" % (self.device, self.device, self.pty))
 
-    def readme_commands(self):
-        # The README's own mpremote commands that copy from lib/ and run examples/ (but the
-        # web panel, which serves until Ctrl-C: test_examples.py runs it).
-        with open("README.md") as f:
+    def page_commands(self, page):
+        # A page's own mpremote commands that copy from lib/ and run examples/, in its order
+        # (but the web panel, which serves until Ctrl-C: test_examples.py runs it).
+        with open(page) as f:
             lines = [line.split("#")[0].strip() for line in f]
         return [
             line[len("mpremote ") :]
@@ -165,12 +165,35 @@ class Mpremote(unittest.TestCase):
             and line != "mpremote run examples/web_panel.py"
         ]
 
-    def test_the_readme_commands_copy_and_run_on_a_repl(self):
-        commands = self.readme_commands()
-        self.assertTrue(len(commands) >= 3, commands)
+    def run_commands(self, commands):
+        outs = []
         for command in commands:
             ok, out = sh(self.connect + command)
             self.assertTrue(ok, command + ": " + out)
+            outs.append(out)
+        return outs
+
+    def test_the_front_pages_five_steps_copy_and_run_on_a_repl(self):
+        # README.md's steps 2, 4 and 5. Step 3's board file opens a real board's UART: this
+        # "board" has none, so the simulated controller stands in for the controller.
+        commands = self.page_commands("README.md")
+        self.assertEqual(
+            commands,
+            [
+                "cp lib/busservo.py :busservo.py",
+                "run examples/check_wiring.py",
+                "run examples/demo.py",
+            ],
+        )
+        commands.insert(1, "cp lib/busservo_sim.py :busservo_sim.py")
+        outs = self.run_commands(commands)
+        self.assertIn("battery: 7.50 V", outs[2])
+        self.assertIn("action group 1 completed", outs[3])
+
+    def test_the_boards_pages_commands_copy_and_run_on_a_repl(self):
+        commands = self.page_commands("docs/boards.md")
+        self.assertTrue(len(commands) >= 3, commands)
+        self.run_commands(commands)
         ok, out = sh(self.connect + "exec 'import busservo; print(busservo.__file__)'")
         self.assertEqual(out.strip(), "busservo.py")  # the copy, not lib/
         self.assertTrue("busservo.py" in os.listdir(self.device))
@@ -233,6 +256,103 @@ class Mpremote(unittest.TestCase):
         for line in ("captured pose 1: ", "captured pose 2: ", "saved 2 poses to teach.json"):
             self.assertIn(line, out)
         self.assertIn("teach.json", os.listdir(self.device))  # on the board, not here
+
+
+class Tagged(unittest.TestCase):
+    # A release is a tag, "v" and package.json's version, and the pages' mip lines for one ask
+    # for that tag's package.json: mpremote's "@tag" (its own code, in CPython) and a board's
+    # version= (the unix port's mip, which reads no "@"). Neither can reach GitHub here: each
+    # records the address it asks for, and is told it is not there.
+    PAGES = ["README.md"] + ["docs/" + name for name in os.listdir("docs") if name.endswith(".md")]
+
+    def lines(self, words):
+        found = []
+        for page in self.PAGES:
+            with open(page) as f:
+                found += [line.strip() for line in f if words in line]
+        return found
+
+    def test_every_tag_in_the_pages_is_package_jsons_version(self):
+        tag = "v" + version_of_package_json()
+        text = ""
+        for page in self.PAGES:
+            with open(page) as f:
+                text += f.read()
+        named = [part.split()[0].strip("`'\").,;") for part in text.split("@v")[1:]]
+        named += [part.split('"')[0] for part in text.split('version="v')[1:]]
+        self.assertTrue(len(named) >= 3, named)
+        self.assertEqual(set("v" + name for name in named), {tag})
+
+    def test_mpremote_asks_for_the_tags_package_json(self):
+        lines = self.lines("mpremote mip install github:OWNER/busservo@")
+        self.assertTrue(len(lines) >= 2, lines)  # the front page's step 2, docs/boards.md
+        probe = scratch("mpremote-mip") + ".py"
+        with open(probe, "w") as f:
+            f.write(
+                "import sys, urllib.error\n"
+                "from mpremote import mip\n"
+                "def urlopen(url):\n"
+                "    print(url)\n"
+                "    raise urllib.error.HTTPError(url, 404, 'not here', {}, None)\n"
+                "class State:\n"
+                "    transport = None  # the board: not reached before the address\n"
+                "    def did_action(self): pass\n"
+                "    def ensure_raw_repl(self): pass\n"
+                "class Args:\n"
+                "    command = ['install']\n"
+                "    packages = sys.argv[1:]\n"
+                "    index = None\n"
+                "    target = '/lib'\n"
+                "    mpy = None\n"
+                "mip.urllib.request.urlopen = urlopen\n"
+                "try:\n"
+                "    mip.do_mip(State(), Args())\n"
+                "except mip.CommandError as e:\n"
+                "    print(e)\n"
+            )
+        try:
+            for line in lines:
+                package = line.split()[3]
+                ok, out = sh(".venv/bin/python %s %s" % (probe, package))
+                self.assertTrue(ok, out)
+                tag = package.split("@")[1]
+                self.assertIn("/OWNER/busservo/%s/package.json\n" % tag, out)
+        finally:
+            os.remove(probe)
+
+    def test_a_boards_mip_asks_for_the_tags_package_json(self):
+        import mip
+        import requests
+
+        with open("docs/boards.md") as f:
+            text = f.read()
+        code = text[text.index("```python\nimport mip\nmip.install(") + len("```python\n") :]
+        code = code[: code.index("```")]
+        self.assertIn('version="v', code)
+        asked = []
+
+        class NotThere:
+            status_code = 404
+
+            def close(self):
+                pass
+
+        def get(url, *args, **kwargs):
+            asked.append(url)
+            return NotThere()
+
+        target = scratch("mip")
+        install, real_get = mip.install, requests.get
+        mip.install = lambda *args, **kwargs: install(*args, target=target, **kwargs)
+        requests.get = get
+        try:
+            exec(code, {})
+        finally:
+            mip.install, requests.get = install, real_get
+            sh("rm -rf " + target)
+        tag = "v" + version_of_package_json()
+        self.assertEqual(len(asked), 1, asked)
+        self.assertTrue(asked[0].endswith("/OWNER/busservo/%s/package.json" % tag), asked)
 
 
 class Manifest(unittest.TestCase):
