@@ -181,14 +181,15 @@ class Mpremote(unittest.TestCase):
             commands,
             [
                 "cp lib/busservo.py :busservo.py",
+                "cp lib/busservo_board.py :busservo_board.py",
                 "run examples/check_wiring.py",
                 "run examples/demo.py",
             ],
         )
-        commands.insert(1, "cp lib/busservo_sim.py :busservo_sim.py")
+        commands.insert(2, "cp lib/busservo_sim.py :busservo_sim.py")
         outs = self.run_commands(commands)
-        self.assertIn("battery: 7.50 V", outs[2])
-        self.assertIn("action group 1 completed", outs[3])
+        self.assertIn("battery: 7.50 V", outs[3])
+        self.assertIn("action group 1 completed", outs[4])
 
     def test_the_boards_pages_commands_copy_and_run_on_a_repl(self):
         commands = self.page_commands("docs/boards.md")
@@ -230,6 +231,7 @@ class Mpremote(unittest.TestCase):
                 f.write("from busservo_sim import SimController as uart\n")
             for command in (
                 "cp lib/busservo.py :busservo.py",
+                "cp lib/busservo_board.py :busservo_board.py",
                 "cp lib/busservo_motion.py :busservo_motion.py",
                 "cp lib/busservo_sim.py :busservo_sim.py",
                 "cp %s/board.py :board.py" % files,
