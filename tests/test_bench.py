@@ -1,5 +1,5 @@
-# The README's benchmark command runs to its end: tests/bench.py, in short (300 calls a
-# figure), so that it cannot rot between the runs that give the README its figures.
+# docs/benchmarks.md's benchmark command runs to its end: tests/bench.py, in short (300 calls a
+# figure), so that it cannot rot between the runs that give the docs their figures.
 import unittest
 
 from shell import sh

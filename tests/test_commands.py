@@ -1,5 +1,5 @@
 # What the driver writes, byte for byte against the worked examples of
-# section I of the protocol document (see the README), and what it refuses to write.
+# section I of the protocol document (see docs/protocol.md), and what it refuses to write.
 import os
 import unittest
 

@@ -305,7 +305,7 @@ class Resync(unittest.TestCase):
             self.assertEqual((bus.running, bus.group), (False, 8))
 
     def test_noise_that_forms_a_frame_start_is_taken_for_that_frame(self):
-        # What no checksum can tell (the README says so): 55 55 04 0F is a battery
+        # What no checksum can tell (docs/protocol.md says so): 55 55 04 0F is a battery
         # frame's start, so the next two bytes, the RUN's header, are its reading;
         # the RUN's other five bytes are noise, and the STOP behind them comes.
         self.assertFrames(
