@@ -359,52 +359,148 @@ class Fine(unittest.TestCase):
 """
 
 
-class RunSh(unittest.TestCase):
-    def test_the_summary_names_each_failed_test_and_its_pass(self):
-        # tests/run.sh in a checkout of its own, with the set-up borrowed from
-        # this one and two test modules that fail in every way they can.
-        repo = folder("suite")
+# A module that runs beside another or fails: each says it has started, then waits (10 s at
+# most) for what the other says.
+TOGETHER = """import os
+import time
+import unittest
+
+HERE = %r
+
+
+def say(name):
+    open(HERE + "/" + name, "w").close()
+
+
+def heard(name):
+    for _ in range(500):
         try:
-            for sub in ("boards", "tests", "lib", "examples", ".venv"):
-                os.mkdir(repo + "/" + sub)
-            ok, out = sh(
-                "cp boards/unix.sh {0}/boards/ && cp tests/run.sh {0}/tests/ && "
-                "cp .ruff.toml .venv/ready {0}/ && mv {0}/ready {0}/.venv/ && "
-                "ln -s {1}/.venv/bin {0}/.venv/bin && "
-                "ln -s {1}/.venv/micropython {0}/.venv/micropython".format(repo, REPO)
-            )
-            self.assertTrue(ok, out)
-            write(repo + "/lib/driver.py", "X = 1\n")
-            write(repo + "/tests/typecheck.sh", "exit 0\n")  # the types: not what is tested
-            write(repo + "/tests/test_mixed.py", MIXED)
-            write(repo + "/tests/test_dies.py", DIES)  # `import os`, unused: style fails too
-            write(repo + "/tests/test_fine.py", FINE)
-            ok, out = sh("unset BUSSERVO_LIB MICROPYPATH; sh %s/tests/run.sh" % repo)
-            self.assertFalse(ok)
-            lines = out.rstrip("\n").split("\n")
-            self.assertEqual(lines[-1], "7 passed, 7 failed", out)
-            self.assertIn("test_mixed: test_good (Mixed) ... ok", lines)  # a failed module: all
-            self.assertIn("test_fine: 2 passed", lines)  # a module that passed: one line
-            self.assertIn("test_fine (.mpy): 2 passed", lines)
-            self.assertFalse("test_fine: test_one (Fine) ... ok" in lines)
-            last = max(i for i, line in enumerate(lines) if line.startswith("types: mypy"))
-            summary = lines[last + 1 : -1]
-            for words in (
-                ("test_mixed", "test_bad", "(.py)"),
-                ("test_mixed", "test_bad", "(.mpy)"),
-                ("test_mixed", "test_noisy_error", "(.py)"),
-                ("test_mixed", "test_noisy_error", "(.mpy)"),
-                ("test_dies", "test_dies", "(.py)"),
-                ("test_dies", "test_dies", "(.mpy)"),
-                ("style",),
-            ):
-                found = [s for s in summary if all(w in s for w in words)]
-                self.assertEqual(len(found), 1, "%s in %s" % (words, summary))
-            self.assertTrue(len(summary) <= 9, summary)
-            ok, out = sh("unset BUSSERVO_LIB MICROPYPATH; sh %s/tests/run.sh -v" % repo)
-            self.assertIn("test_fine: test_one (Fine) ... ok", out.split("\n"))  # -v: every test
-        finally:
-            sh("rm -rf " + repo)
+            os.stat(HERE + "/" + name)
+            return True
+        except OSError:
+            time.sleep_ms(20)
+    return False
+
+
+class Together(unittest.TestCase):
+    def test_together(self):
+        say(%r)
+        self.assertTrue(heard(%r))
+        %s
+"""
+
+
+class RunSh(unittest.TestCase):
+    # tests/run.sh in a checkout of its own, with the set-up borrowed from this one and two
+    # test modules that fail in every way they can, and one that passes.
+    def setUp(self):
+        repo = self.repo = folder("suite")
+        for sub in ("boards", "tests", "lib", "examples", ".venv"):
+            os.mkdir(repo + "/" + sub)
+        ok, out = sh(
+            "cp boards/unix.sh {0}/boards/ && cp tests/run.sh {0}/tests/ && "
+            "cp .ruff.toml .venv/ready {0}/ && mv {0}/ready {0}/.venv/ && "
+            "ln -s {1}/.venv/bin {0}/.venv/bin && "
+            "ln -s {1}/.venv/micropython {0}/.venv/micropython".format(repo, REPO)
+        )
+        self.assertTrue(ok, out)
+        write(repo + "/lib/driver.py", "X = 1\n")
+        write(repo + "/tests/typecheck.sh", "exit 0\n")  # the types: not what is tested
+        write(repo + "/tests/test_mixed.py", MIXED)
+        write(repo + "/tests/test_dies.py", DIES)  # `import os`, unused: style fails too
+        write(repo + "/tests/test_fine.py", FINE)
+
+    def tearDown(self):
+        sh("rm -rf " + self.repo)
+
+    def run_sh(self, args=""):
+        """(ok, its lines) of tests/run.sh args, in the checkout of its own."""
+        ok, out = sh("unset BUSSERVO_LIB MICROPYPATH; sh %s/tests/run.sh %s" % (self.repo, args))
+        return ok, out.rstrip("\n").split("\n")
+
+    def test_the_summary_names_each_failed_test_and_its_pass(self):
+        ok, lines = self.run_sh("--mpy-all")  # every module against the .mpy files too
+        out = "\n".join(lines)
+        self.assertFalse(ok)
+        self.assertEqual(lines[-1], "7 passed, 7 failed", out)
+        self.assertIn("test_mixed: test_good (Mixed) ... ok", lines)  # a failed module: all
+        self.assertIn("test_fine: 2 passed", lines)  # a module that passed: one line
+        self.assertIn("test_fine (.mpy): 2 passed", lines)
+        self.assertFalse("test_fine: test_one (Fine) ... ok" in lines)
+        last = max(i for i, line in enumerate(lines) if line.startswith("types: mypy"))
+        summary = lines[last + 1 : -1]
+        for words in (
+            ("test_mixed", "test_bad", "(.py)"),
+            ("test_mixed", "test_bad", "(.mpy)"),
+            ("test_mixed", "test_noisy_error", "(.py)"),
+            ("test_mixed", "test_noisy_error", "(.mpy)"),
+            ("test_dies", "test_dies", "(.py)"),
+            ("test_dies", "test_dies", "(.mpy)"),
+            ("style",),
+        ):
+            found = [s for s in summary if all(w in s for w in words)]
+            self.assertEqual(len(found), 1, "%s in %s" % (words, summary))
+        self.assertTrue(len(summary) <= 9, summary)
+        ok, lines = self.run_sh("-v")
+        self.assertIn("test_fine: test_one (Fine) ... ok", lines)  # -v: every test
+        # The .mpy pass runs only the modules run.sh's MPY names: none of these.
+        self.assertEqual(lines[-1], "4 passed, 4 failed", lines)
+        self.assertFalse([line for line in lines if "(.mpy)" in line], lines)
+
+    def test_modules_named_run_alone_in_the_order_given(self):
+        ok, lines = self.run_sh("tests/test_fine.py test_mixed")  # a path, or a name
+        self.assertFalse(ok)
+        self.assertEqual(lines[-1], "3 passed, 2 failed", lines)
+        self.assertEqual(lines[0], "test_fine: 2 passed")
+        self.assertFalse([line for line in lines if "test_dies" in line or ": ruff" in line])
+        self.assertEqual(
+            self.run_sh("test_fine"), (True, ["test_fine: 2 passed", "2 passed, 0 failed"])
+        )
+        ok, lines = self.run_sh("style")
+        self.assertEqual(
+            (ok, lines[-2:]),
+            (False, ["  style: ruff (see its output above)", "0 passed, 1 failed"]),
+        )
+
+    def test_k_runs_the_tests_whose_name_or_class_holds_the_pattern(self):
+        self.assertEqual(
+            self.run_sh("-k good"), (True, ["test_mixed: 1 passed", "1 passed, 0 failed"])
+        )
+        self.assertEqual(
+            self.run_sh("-k Fine"), (True, ["test_fine: 2 passed", "2 passed, 0 failed"])
+        )
+        # No test of that name: nothing but the summary, no style nor types.
+        self.assertEqual(self.run_sh("-k no_such_test"), (True, ["0 passed, 0 failed"]))
+        ok, lines = self.run_sh("-k bad test_mixed test_fine")
+        self.assertEqual((ok, lines[-1]), (False, "0 passed, 1 failed"), lines)
+
+    def test_modules_run_at_once_and_are_printed_in_their_order(self):
+        # test_first ends after test_second, yet is printed first. One at a time, neither
+        # would hear from the other.
+        first = TOGETHER % (self.repo, "first started", "second started", 'heard("second ended")')
+        second = TOGETHER % (self.repo, "second started", "first started", 'say("second ended")')
+        write(self.repo + "/tests/test_first.py", first)
+        write(self.repo + "/tests/test_second.py", second)
+        self.assertEqual(
+            self.run_sh("-j 2 test_first test_second"),
+            (True, ["test_first: 1 passed", "test_second: 1 passed", "2 passed, 0 failed"]),
+        )
+
+    def test_bad_arguments_are_refused_saying_why(self):
+        for args, said in (
+            ("test_nothing", "no test module test_nothing (no tests/test_nothing.py)"),
+            ("tests/fine.py", "no test module tests/fine.py: a module's name starts test_"),
+            ("-x", "no option -x"),
+            ("-k", "-k wants a PATTERN"),
+            ("-j 0", "-j wants a number of modules at once, 1 or more, got '0'"),
+        ):
+            ok, lines = self.run_sh(args)
+            self.assertFalse(ok, args)
+            self.assertEqual(lines, ["tests/run.sh: %s (sh tests/run.sh --help)" % said], args)
+        ok, lines = self.run_sh("--help")
+        self.assertTrue(ok, lines)
+        for form in ("run.sh test_frames", "run.sh -k ", "run.sh -v", "run.sh -j ", "--mpy-all"):
+            self.assertTrue([line for line in lines if form in line], form)
 
 
 class Modes(unittest.TestCase):
