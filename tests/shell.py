@@ -5,11 +5,26 @@ import time
 
 MICROPYTHON = ".venv/bin/micropython"
 MPREMOTE = ".venv/bin/mpremote"
+PYTHON = os.getcwd() + "/.venv/bin/python"  # CPython (tests start in the repository's root)
 
 
 def scratch(name):
-    """A fresh path under /tmp for this run."""
-    return "/tmp/busservo-%s-%s" % (name, "".join("%02x" % b for b in os.urandom(4)))
+    """A fresh path in $TMPDIR (else /tmp) for this run."""
+    tmp = os.getenv("TMPDIR") or "/tmp"
+    return "%s/busservo-%s-%s" % (tmp, name, "".join("%02x" % b for b in os.urandom(4)))
+
+
+def free_port():
+    """A TCP port on 127.0.0.1 that nothing listens on: the one the OS gives a bind to port 0
+    (asked from CPython: MicroPython's sockets do not say which port they were given), so that
+    two runs of the tests at once never serve on the same port."""
+    ok, out = sh(
+        PYTHON + " -c 'import socket; s = socket.socket(); "
+        's.bind(("127.0.0.1", 0)); print(s.getsockname()[1])\''
+    )
+    if not ok:
+        raise OSError("no free port: " + out)
+    return int(out)
 
 
 def sh(command):

@@ -1,13 +1,13 @@
 # The web panel in a real browser: tests/browser.py (CPython, Selenium, Debian's headless
 # Chromium) run once, each of its tests a test here. Where the browser is missing (no apt to
 # install it with), each skips, saying why. Its screenshot of the panel on a phone-sized
-# screen goes to .venv/web_panel.png (the README's is examples/web_panel.png).
+# screen goes to a scratch file, checked, then removed (the README's is examples/web_panel.png).
 import os
 import unittest
 
-from shell import sh
+from shell import scratch, sh
 
-SCREENSHOT = ".venv/web_panel.png"
+SCREENSHOT = scratch("web_panel") + ".png"
 TESTS = (
     "test_1_nothing_moves_when_the_page_loads_or_logs_in",
     "test_2_armed_a_slider_drag_moves_the_simulated_servo_there",
