@@ -37,6 +37,24 @@ def sh(command):
     return status == 0, text
 
 
+def sh_all(commands):
+    """Run the commands at once, each with sh as sh() does: [(ok, what it printed)] in their
+    order. For commands that spend their time waiting (an example's moves, on real time)."""
+    base = scratch("all")
+    os.mkdir(base)
+    for i, command in enumerate(commands):
+        each = "%s/%d" % (base, i)
+        os.system("( (%s) >%s.out 2>&1; echo $? >%s.rc ) </dev/null &" % (command, each, each))
+    done = []
+    for i in range(len(commands)):
+        each = "%s/%d" % (base, i)
+        status = wait_for(each + ".rc", 10 * 60 * 1000, "\n")
+        with open(each + ".out") as f:
+            done.append((status is not None and status.strip() == "0", f.read()))
+    os.system("rm -rf " + base)
+    return done
+
+
 def start(command, log):
     """Start command in the background, its output to log; return its pid."""
     ok, pid = sh("%s >%s 2>&1 & echo $!" % (command, log))
