@@ -126,7 +126,9 @@ class FromAnyFolder(unittest.TestCase):
         for script, said in (("robot.py", "BusServo"), ("uses.py", "beside it")):
             ok, out = sh("cd %s && sh %s %s" % (d, UNIX_SH, script))
             self.assertEqual((ok, out), (True, said + "\n"), script)
-        ok, out = sh("cd %s && echo 'import busservo; busservo.BusServo' | sh %s" % (d, UNIX_SH))
+        # (HOME: the REPL keeps its history there, in this test's folder)
+        command = "cd %s && echo 'import busservo; busservo.BusServo' | HOME=%s sh %s"
+        ok, out = sh(command % (d, d, UNIX_SH))
         self.assertTrue(ok, out)
         self.assertIn("<class 'BusServo'>", out)  # the REPL too
 
