@@ -60,6 +60,11 @@ class EndToEnd(unittest.TestCase):
         start = time.ticks_ms()
         time.sleep_ms(300)
         mid = bus.read_positions([1, 2, 3], TIMEOUT_MS)
+        for _ in range(10):  # on a busy machine the simulator may take the move late
+            if mid[1] != 500:
+                break
+            time.sleep_ms(100)
+            mid = bus.read_positions([1, 2, 3], TIMEOUT_MS)
         self.assertTrue(500 < mid[1] < 900, mid)
         self.assertTrue(100 < mid[2] < 500, mid)
         self.assertEqual(mid[3], 500)
