@@ -249,13 +249,18 @@ kill_tree() {
         }' | xargs kill 2>/dev/null
 }
 # On Ctrl-C (which the jobs, started in the background, do not get) or a kill: stop every
-# job still running, with all it started.
+# job still running, with its process group (what it left in the background: an example,
+# Chromium) and what it started that left the group (a simulator behind a pty).
 stop() {
     trap - INT TERM
     i=1
     while [ $i -le $n ]; do
         eval "pid=\${pid_$i:-}"
-        [ -n "$pid" ] && [ ! -e "$tmp/$i.rc" ] && kill_tree "$pid"
+        if [ -n "$pid" ] && [ ! -e "$tmp/$i.rc" ]; then
+            group=$(cat "$tmp/$i.pid" 2>/dev/null)
+            kill_tree "$pid"
+            [ -n "$group" ] && kill -- "-$group" 2>/dev/null
+        fi
         i=$((i + 1))
     done
     rm -rf "$tmp"
@@ -289,10 +294,12 @@ except SystemExit:
     pass"
 }
 
-# run_job I: job I, its output to I.out, then its exit status to I.rc; then it says so.
+# run_job I: job I, its output to I.out, then its exit status to I.rc; then it says so. It
+# runs in a process group of its own (I.pid), for stop().
 run_job() {
-    eval "kind=\$kind_$1 name=\$name_$1"
-    home=$tmp/$1.home
+    i=$1
+    eval "kind=\$kind_$i name=\$name_$i"
+    home=$tmp/$i.home
     mkdir "$home"
     nice=""
     case " $NICE " in *" $name "*) nice="nice -n 10" ;; esac
@@ -300,17 +307,23 @@ run_job() {
     [ "$kind" = mpy ] && lib=.venv/mpy
     case $kind in
     py | mpy)
-        HOME=$home TMPDIR=$home BUSSERVO_LIB=$lib $nice sh boards/unix.sh -c "$(snippet "$name")"
+        set -- env HOME="$home" TMPDIR="$home" BUSSERVO_LIB="$lib" $nice \
+            sh boards/unix.sh -c "$(snippet "$name")"
         ;;
     style)
-        .venv/bin/ruff check -q --no-cache $CODE &&
-            .venv/bin/ruff format -q --no-cache --check $CODE
+        set -- sh -c ".venv/bin/ruff check -q --no-cache $CODE &&
+            .venv/bin/ruff format -q --no-cache --check $CODE"
         ;;
-    types) sh tests/typecheck.sh ;;
-    esac </dev/null >"$tmp/$1.out" 2>&1 4>&-
-    echo $? >"$tmp/$1.rc"
+    types) set -- sh tests/typecheck.sh ;;
+    esac
+    .venv/bin/python -c 'import os, sys
+os.setpgid(0, 0)
+os.execvp(sys.argv[1], sys.argv[1:])' "$@" </dev/null >"$tmp/$i.out" 2>&1 4>&- &
+    echo $! >"$tmp/$i.pid"
+    wait $!
+    echo $? >"$tmp/$i.rc"
     rm -rf "$home"
-    echo "$1" >&4
+    echo "$i" >&4
 }
 
 # show I: print job I's result, add up its counts and note what failed.
