@@ -79,6 +79,18 @@ def wait_until(path, text, ms):
     return None
 
 
+def wait_until_false(test, ms):
+    """True once test() is false, or False if it is still true after ms."""
+    import time
+
+    start = time.ticks_ms()
+    while test():
+        if time.ticks_diff(time.ticks_ms(), start) > ms:
+            return False
+        time.sleep_ms(20)
+    return True
+
+
 def ended(base, pid, ms=10000):
     """The exit status of what launch() started (killed if it has not ended in ms)."""
     rc = wait_until(base + ".rc", "\n", ms)
@@ -392,6 +404,20 @@ class Together(unittest.TestCase):
 """
 
 
+# A module that leaves a process running in the background (its pid in the file "sleeper"),
+# then waits.
+SLOW = """import os
+import time
+import unittest
+
+
+class Slow(unittest.TestCase):
+    def test_slow(self):
+        os.system("sleep 600 >/dev/null 2>&1 & echo $! >%s/sleeper")
+        time.sleep(600)
+"""
+
+
 class RunSh(unittest.TestCase):
     # tests/run.sh in a checkout of its own, with the set-up borrowed from this one and two
     # test modules that fail in every way they can, and one that passes.
@@ -487,6 +513,20 @@ class RunSh(unittest.TestCase):
             self.run_sh("-j 2 test_first test_second"),
             (True, ["test_first: 1 passed", "test_second: 1 passed", "2 passed, 0 failed"]),
         )
+
+    def test_ctrl_c_stops_each_module_and_what_it_left_running(self):
+        write(self.repo + "/tests/test_slow.py", SLOW % self.repo)
+        base = self.repo + "/run"
+        pid = launch("sh %s/tests/run.sh test_slow" % self.repo, base, terminal=True)
+        sleeper = wait_until(self.repo + "/sleeper", "\n", 15000)
+        self.assertTrue(sleeper, read(base + ".log"))
+        os.system("kill -s INT -- -%d" % pid)  # Ctrl-C
+        self.assertEqual(ended(base, pid), 130, read(base + ".log"))
+        # Gone (once reaped: a process just killed may linger a moment as a zombie).
+        alive = "ps -o stat= -p %s | grep -qv Z" % sleeper.strip()
+        gone = wait_until_false(lambda: sh(alive)[0], 5000)
+        os.system("kill %s 2>/dev/null" % sleeper.strip())
+        self.assertTrue(gone, "the module's sleeper is still running")
 
     def test_bad_arguments_are_refused_saying_why(self):
         for args, said in (
