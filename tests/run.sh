@@ -42,8 +42,9 @@ cd "$(dirname "$0")/.."
 # The rest would run the same code again. --mpy-all runs every module against the .mpy too.
 MPY="test_commands test_sim test_async test_motion test_web"
 # The longest modules start first, so that the short ones fill the other cores meanwhile and
-# the run ends soon after its longest module does (the order measured on an idle machine).
-SLOW="test_reliability test_browser test_web test_examples test_scripts test_install test_e2e"
+# the run ends soon after its longest module does (in the order of their times, measured).
+SLOW="test_reliability test_browser test_web test_examples test_install test_e2e test_scripts"
+SLOW="$SLOW test_bench_web test_docs"
 # The modules on simulated time alone (tests/wire.py's clock: nothing real is waited for) run
 # at a lower priority (nice 10): they lose nothing by waiting for a core, and the modules on
 # real time beside them (the web panel, the browser, the pty, the examples), which can, get
