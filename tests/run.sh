@@ -51,6 +51,7 @@ SLOW="$SLOW test_bench_web test_docs"
 # one first. test_reliability takes most of the suite's CPU time.
 NICE="test_reliability test_wire test_motion test_bench_motion"
 CODE="lib tests examples boards"
+COUNTS="tests/run.sh-counts:"  # the last line of a module's run: tests run, failed, skipped
 
 verbose=""
 pattern=""
@@ -249,11 +250,10 @@ kill_tree() {
             }
         }' | xargs kill 2>/dev/null
 }
-# On Ctrl-C (which the jobs, started in the background, do not get) or a kill: stop every
-# job still running, with its process group (what it left in the background: an example,
-# Chromium) and what it started that left the group (a simulator behind a pty).
-stop() {
-    trap - INT TERM
+# On Ctrl-C (which the jobs, started in the background, do not get), a kill, or any exit:
+# stop every job still running, with its process group (what it left in the background: an
+# example, Chromium) and what it started that left the group (a simulator behind a pty).
+stop_jobs() {
     i=1
     while [ $i -le $n ]; do
         eval "pid=\${pid_$i:-}"
@@ -265,17 +265,17 @@ stop() {
         i=$((i + 1))
     done
     rm -rf "$tmp"
-    exit "$1"
 }
-trap 'stop 130' INT
-trap 'stop 143' TERM
-trap 'rm -rf "$tmp"' EXIT
+trap 'trap - INT TERM; exit 130' INT
+trap 'trap - INT TERM; exit 143' TERM
+trap 'stop_jobs' EXIT
 
 # The unittest run of module $1, as `sh boards/unix.sh -c` takes it. unittest.main() is
 # called here rather than by the module: micropython-unittest 0.4 ends it with
 # sys.exit(failures > 0), which MicroPython prints and turns into exit 1 even when all
 # passed. With -k (RUN_SH_K), unittest 0.4 finds a test case's tests with dir(): a dir() of
-# unittest's own lists those -k picks and no other.
+# unittest's own lists those -k picks and no other. Its last line gives the counts (what
+# the tests print may hold other runs' summaries: a failed browser test prints Selenium's).
 snippet() {
     echo "import os, sys, unittest
 sys.path.append('tests')
@@ -289,10 +289,15 @@ if k:
         return names
 
     unittest.dir = picked
+results = []
+run = unittest.TestRunner.run
+unittest.TestRunner.run = lambda self, suite: results.append(run(self, suite)) or results[-1]
 try:
     unittest.main('$1')
 except SystemExit:
-    pass"
+    pass
+r = results[-1]
+print('$COUNTS', r.testsRun, r.failuresNum + r.errorsNum, r.skippedNum)"
 }
 
 # run_job I: job I, its output to I.out, then its exit status to I.rc; then it says so. It
@@ -362,16 +367,25 @@ show() {
     py) label="$name:" pass=.py ;;
     mpy) label="$name (.mpy):" pass=.mpy ;;
     esac
-    ran=$(printf '%s\n' "$out" | sed -n 's/^Ran \([0-9]*\) tests*$/\1/p' | tail -n 1)
-    bad=$(printf '%s\n' "$out" | sed -n 's/^FAILED (failures=\([0-9]*\), errors=\([0-9]*\)).*/\1 + \2/p')
-    skip=$(printf '%s\n' "$out" | grep -c '\.\.\. *skipped:')
+    # The counts: the snippet's last line, if the module ran to its end (then not shown).
+    ran=""
+    last=$(printf '%s\n' "$out" | tail -n 1)
+    case $last in
+    "$COUNTS "*)
+        set -f
+        set -- $last
+        set +f
+        ran=$2 bad=$3 skip=$4
+        out=$(printf '%s\n' "$out" | sed '$d')
+        ;;
+    esac
     # Each test's line is "NAME (CLASS) ..." then its verdict, which its own output may have
-    # pushed onto a later line; the tracebacks after "Ran N tests" are not read.
-    names=$(printf '%s\n' "$out" | awk '
-        /^Ran [0-9]+ tests?$/ { exit }
-        match($0, /^test[^ ]* \([^ ]*\) \.\.\./) { name = substr($0, 1, RLENGTH - 4) }
+    # pushed onto a later line. The tracebacks after unittest's "Ran N tests" are not read:
+    # that line comes after N tests' lines (a test may print another run's before).
+    names=$(printf '%s\n' "$out" | awk -v ran="${ran:--1}" '
+        $0 ~ "^Ran " ran " tests?$" && tests == ran { exit }
+        match($0, /^test[^ ]* \([^ ]*\) \.\.\./) { name = substr($0, 1, RLENGTH - 4); tests++ }
         / FAIL$/ { print name }')
-    bad=$((${bad:-0}))
     [ -n "$pattern" ] && [ "$ran" = 0 ] && return # -k picked none of its tests
     if [ -z "$ran" ] || [ "$bad" != 0 ] || [ -n "$verbose" ]; then
         printf '%s\n' "$out" | sed "s|^|$label |"

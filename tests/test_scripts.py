@@ -404,6 +404,21 @@ class Together(unittest.TestCase):
 """
 
 
+# A module whose tests print other runs' summaries, as a failed browser test prints
+# Selenium's: its own counts are still its own.
+NOISY = """import unittest
+
+
+class Noisy(unittest.TestCase):
+    def test_prints_other_runs_summaries(self):
+        print("Ran 3 tests\\n\\nFAILED (failures=2, errors=1)")
+        print("Ran 4 tests\\n\\nFAILED (failures=1, errors=0)")
+
+    def test_fails_saying_so(self):
+        self.fail("Ran 5 tests\\n\\nFAILED (failures=2, errors=2)")
+"""
+
+
 # A module that leaves a process running in the background (its pid in the file "sleeper"),
 # then waits.
 SLOW = """import os
@@ -512,6 +527,16 @@ class RunSh(unittest.TestCase):
         self.assertEqual(
             self.run_sh("-j 2 test_first test_second"),
             (True, ["test_first: 1 passed", "test_second: 1 passed", "2 passed, 0 failed"]),
+        )
+
+    def test_a_module_that_prints_other_runs_summaries_is_counted_by_its_own(self):
+        write(self.repo + "/tests/test_noisy.py", NOISY)
+        ok, lines = self.run_sh("test_noisy")
+        self.assertFalse(ok)
+        self.assertEqual(
+            lines[-3:],
+            ["Failed:", "  test_noisy (.py): test_fails_saying_so (Noisy)", "1 passed, 1 failed"],
+            lines,
         )
 
     def test_ctrl_c_stops_each_module_and_what_it_left_running(self):
