@@ -1,9 +1,9 @@
 #!/bin/sh
 # The test suite: set up the MicroPython unix port (boards/unix.sh), run every tests/test_*.py
-# on it, one process a module and several at once, the modules MPY names (below) again against
-# the .mpy files mpy-cross makes of lib/, check the style and the types, and end with the line
-# "N passed, N failed" (", N skipped" when some were). Exits non-zero if any test failed or
-# any module did not run to its end.
+# on it, one process a module and several at once, the five that look at what loading a .mpy
+# changes (MPY, in this file) again against the .mpy files mpy-cross makes of lib/, check the
+# style and the types, and end with the line "N passed, N failed" (", N skipped" when some
+# were). Exits non-zero if any test failed or any module did not run to its end.
 #
 #   sh tests/run.sh                            # all of it
 #   sh tests/run.sh test_frames test_queries   # those modules (tests/test_frames.py too)
@@ -11,7 +11,7 @@
 #   sh tests/run.sh -k battery                 # the tests whose name holds "battery" (or
 #                                              #   whose class's name does), in every module
 #   sh tests/run.sh -v                         # every test's line, not one a module
-#   sh tests/run.sh -j 1                       # one module at a time (default: see jobs=)
+#   sh tests/run.sh -j 1                       # one module at a time (default: the cores + 1)
 #   sh tests/run.sh --mpy-all                  # every module against the .mpy files too
 #   sh tests/run.sh --help                     # this text (also -h)
 #
