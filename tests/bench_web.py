@@ -23,10 +23,10 @@ import time
 
 import busservo
 import busservo_motion as bm
+from shell import free_port  # a port no other run uses at the same time
 
 web_world = None  # imported after ram() has measured busservo_web's import
 
-PORT = 18301
 PASSWORD = "bench-pw-1"
 
 
@@ -54,14 +54,15 @@ def ram():
 
     world = web_world.live()
     robot = web_world.robot(world)
+    port = free_port()
     figures = []
 
     async def main():
         gc.collect()
         start = gc.mem_alloc()
-        server = asyncio.create_task(busservo_web.serve(robot, PASSWORD, PORT))
+        server = asyncio.create_task(busservo_web.serve(robot, PASSWORD, port))
         await asyncio.sleep_ms(100)
-        reader, writer = await asyncio.open_connection("127.0.0.1", PORT)
+        reader, writer = await asyncio.open_connection("127.0.0.1", port)
         await writer.awrite(b"GET /api/state HTTP/1.0\r\nHost: x\r\n")  # half a request
         await asyncio.sleep_ms(100)
         gc.collect()
@@ -84,17 +85,17 @@ def latency(joints, samples):
     world = web_world.live()
     robot = web_world.robot(world)
     names = robot.names[:joints]
+    port = free_port()
     found = []
 
     async def page(token, stop):
         while not stop:
-            await web_world.http(PORT + joints, "GET", "/api/state", token=token)
+            await web_world.http(port, "GET", "/api/state", token=token)
             await asyncio.sleep_ms(200)
 
     async def main():
-        server = asyncio.create_task(busservo_web.serve(robot, PASSWORD, PORT + joints))
+        server = asyncio.create_task(busservo_web.serve(robot, PASSWORD, port))
         await asyncio.sleep_ms(100)
-        port = PORT + joints
         token = await web_world.login(port, PASSWORD)
         http = web_world.http
         await http(port, "POST", "/api/arm", {"on": True}, token)

@@ -28,8 +28,23 @@ except ImportError:
 
 CHROMIUM = "/usr/bin/chromium"
 CHROMEDRIVER = "/usr/bin/chromedriver"
-PORT = 18201
-PROBE = 18202
+
+
+def _free_ports(n):
+    """n TCP ports on 127.0.0.1 that nothing listens on, as the OS gives binds to port 0: no
+    other run of the tests, at the same time, serves on them."""
+    import socket
+
+    held = [socket.socket() for _ in range(n)]
+    for s in held:
+        s.bind(("127.0.0.1", 0))
+    ports = [s.getsockname()[1] for s in held]
+    for s in held:
+        s.close()
+    return ports
+
+
+PORT, PROBE = _free_ports(2)
 PASSWORD = "browser-pw-7"
 URL = "http://127.0.0.1:%d/" % PORT
 SCREENSHOT = sys.argv[1] if len(sys.argv) > 1 else None
@@ -92,7 +107,7 @@ class Panel(unittest.TestCase):
 
     @classmethod
     def setUpClass(cls):
-        log = cls.log = open(os.environ.get("TMPDIR", "/tmp") + "/busservo-web-world.log", "w")
+        log = cls.log = open(_fresh_dir() + "/web_world.log", "w")
         cls.server = subprocess.Popen(
             [
                 "sh",
@@ -109,7 +124,10 @@ class Panel(unittest.TestCase):
             stderr=subprocess.STDOUT,
         )
         ok = until(lambda: _listening(PROBE) and _listening(PORT), 20)
-        assert ok is not None, "the panel's server did not start (see %s)" % log.name
+        if ok is None:
+            log.flush()
+            with open(log.name) as f:
+                raise AssertionError("the panel's server did not start: " + f.read())
 
     @classmethod
     def tearDownClass(cls):
@@ -138,7 +156,11 @@ class Panel(unittest.TestCase):
             "mobileEmulation",
             {"deviceMetrics": {"width": 390, "height": 844, "pixelRatio": 2.0, "touch": False}},
         )
-        self.browser = webdriver.Chrome(service=Service(CHROMEDRIVER), options=options)
+        # A home of its own: what Chromium keeps there (crash reports) is no one else's.
+        home = _fresh_dir()
+        env = dict(os.environ, HOME=home)
+        env.update(XDG_CONFIG_HOME=home + "/.config", XDG_CACHE_HOME=home + "/.cache")
+        self.browser = webdriver.Chrome(service=Service(CHROMEDRIVER, env=env), options=options)
         self.browser.set_window_size(390, 844)
         self.addCleanup(self.browser.quit)
 

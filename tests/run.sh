@@ -1,13 +1,117 @@
 #!/bin/sh
-# The whole test suite: set up the MicroPython unix port (boards/unix.sh), run every
-# tests/test_*.py on it, one process each, first against lib/*.py, then against the .mpy files
-# mpy-cross makes of them; check the style and the types; end with the line "N passed, N failed".
-# Exits non-zero if any test failed or any module did not run to its end. A module that passes
-# gets one line; one that fails shows all its output. `sh tests/run.sh -v` shows every test.
+# The test suite: set up the MicroPython unix port (boards/unix.sh), run every tests/test_*.py
+# on it, one process a module and several at once, the five that look at what loading a .mpy
+# changes (MPY, in this file) again against the .mpy files mpy-cross makes of lib/, check the
+# style and the types, and end with the line "N passed, N failed" (", N skipped" when some
+# were). Exits non-zero if any test failed or any module did not run to its end.
+#
+#   sh tests/run.sh                            # all of it
+#   sh tests/run.sh test_frames test_queries   # those modules (tests/test_frames.py too)
+#   sh tests/run.sh style types                # the style (ruff) and the types (mypy) alone
+#   sh tests/run.sh -k battery                 # the tests whose name holds "battery" (or
+#                                              #   whose class's name does), in every module
+#   sh tests/run.sh -v                         # every test's line, not one a module
+#   sh tests/run.sh -j 1                       # one module at a time (default: the cores + 1)
+#   sh tests/run.sh --mpy-all                  # every module against the .mpy files too
+#   sh tests/run.sh --help                     # this text (also -h)
+#
+# A module that passed gets a line (and one a skip); one that failed, all its output. The
+# failed tests are named again just above the last line. Each module's output waits in a
+# scratch folder until it is printed, in the order of the modules above, whatever order they
+# end in. Each module runs with HOME and TMPDIR in a folder of its own (removed after it), so
+# that what a tool writes there by itself (the REPL's history, Chromium's crash reports) is
+# neither the user's nor another run's.
 set -u
-verbose=""
-[ "${1:-}" = "-v" ] && verbose=1
+usage() {
+    sed -n '2,/^[^#]/s/^# \{0,1\}//p' "$0"
+}
+die() {
+    echo "tests/run.sh: $1 (sh tests/run.sh --help)" >&2
+    exit 2
+}
 cd "$(dirname "$0")/.."
+
+# The .mpy pass. boards/unix.sh --mpy compiles lib/*.py with mpy-cross at its default
+# optimisation, as the unix port compiles a .py itself (line numbers and asserts kept): what a
+# module does is the same from either. What the .mpy changes is how a module is loaded: no
+# compile on the board, the .mpy's own format, a __file__ that ends in .mpy, and what is looked
+# for beside it (the web panel's page). So this pass runs, for each module in lib/, one test
+# module that imports it and looks at those: test_commands (busservo, and that its __file__ is
+# the .mpy), test_sim (busservo_sim), test_async (busservo_async), test_motion
+# (busservo_motion) and test_web (busservo_web, and the page it serves, found beside the .mpy).
+# The rest would run the same code again. --mpy-all runs every module against the .mpy too.
+MPY="test_commands test_sim test_async test_motion test_web"
+# The longest modules start first, so that the short ones fill the other cores meanwhile and
+# the run ends soon after its longest module does (in the order of their times, measured).
+SLOW="test_reliability test_browser test_web test_examples test_install test_e2e test_scripts"
+SLOW="$SLOW test_bench_web test_docs"
+# The modules on simulated time alone (tests/wire.py's clock: nothing real is waited for) run
+# at a lower priority (nice 10): they lose nothing by waiting for a core, and the modules on
+# real time beside them (the web panel, the browser, the pty, the examples), which can, get
+# one first. test_reliability takes most of the suite's CPU time.
+NICE="test_reliability test_wire test_motion test_bench_motion"
+CODE="lib tests examples boards"
+COUNTS="tests/run.sh-counts:"  # the last line of a module's run: tests run, failed, skipped
+
+verbose=""
+pattern=""
+jobs=""
+mpy_all=""
+modules=""
+checks=""
+while [ $# -gt 0 ]; do
+    case $1 in
+    -h | --help)
+        usage
+        exit 0
+        ;;
+    -v) verbose=1 ;;
+    -k)
+        [ $# -ge 2 ] && [ -n "$2" ] || die "-k wants a PATTERN"
+        pattern=$2
+        shift
+        ;;
+    -k?*) pattern=${1#-k} ;;
+    -j)
+        [ $# -ge 2 ] || die "-j wants a number"
+        jobs=$2
+        shift
+        ;;
+    -j?*) jobs=${1#-j} ;;
+    --mpy-all) mpy_all=1 ;;
+    -*) die "no option $1" ;;
+    style | types) checks="$checks $1" ;;
+    *)
+        name=${1##*/}
+        name=${name%.py}
+        case $name in
+        test_*[!A-Za-z0-9_]* | test_) die "no test module $1" ;;
+        test_*) ;;
+        *) die "no test module $1: a module's name starts test_" ;;
+        esac
+        [ -f "tests/$name.py" ] || die "no test module $1 (no tests/$name.py)"
+        case " $modules " in *" $name "*) ;; *) modules="$modules $name" ;; esac
+        ;;
+    esac
+    shift
+done
+case $jobs in
+"") ;;
+*[!0-9]* | 0*) die "-j wants a number of modules at once, 1 or more, got '$jobs'" ;;
+esac
+# Nothing named: every module, and the style and the types unless -k picks tests.
+if [ -z "$modules$checks" ]; then
+    for t in tests/test_*.py; do
+        name=${t#tests/}
+        modules="$modules ${name%.py}"
+    done
+    [ -n "$pattern" ] || checks="style types"
+fi
+selected() {
+    case " $modules " in *" $1 "*) return 0 ;; esac
+    return 1
+}
+
 sh boards/unix.sh --setup || exit 1
 
 sudo=""
@@ -26,12 +130,6 @@ apt_install() {
     $sudo apt-get install -y -qq "$@" >/dev/null 2>&1
 }
 
-# socat (a Debian package) puts the unix port's REPL behind a pty for the mpremote test.
-if ! command -v socat >/dev/null 2>&1; then
-    apt_install socat socat ||
-        echo "tests/run.sh: could not install socat: the mpremote test will be skipped" >&2
-fi
-
 # pip_install PACKAGE MODULE VERSION WHAT-FOR WHAT-SKIPS: PACKAGE==VERSION from PyPI into
 # .venv/, unless MODULE is that version already; without it, WHAT-SKIPS skips, saying so.
 pip_install() {
@@ -42,18 +140,30 @@ pip_install() {
         echo "tests/run.sh: could not install $1: $5 will be skipped" >&2
 }
 
+# What the modules chosen need, and only that, so that one module starts at once.
+# socat (a Debian package) puts the unix port's REPL behind a pty for the mpremote test.
+if selected test_install && ! command -v socat >/dev/null 2>&1; then
+    apt_install socat socat ||
+        echo "tests/run.sh: could not install socat: the mpremote test will be skipped" >&2
+fi
+
 # The web panel's browser tests (tests/browser.py): Selenium (pinned) drives Debian's Chromium
 # through its chromedriver; no browser is downloaded.
-pip_install selenium selenium 4.50.0 "for the browser tests" "the browser tests"
-if [ ! -x /usr/bin/chromium ] || [ ! -x /usr/bin/chromedriver ]; then
-    apt_install "the browser for the web panel's tests (a few minutes)" chromium chromium-driver ||
-        echo "tests/run.sh: could not install chromium: the browser tests will be skipped" >&2
+if selected test_browser; then
+    pip_install selenium selenium 4.50.0 "for the browser tests" "the browser tests"
+    if [ ! -x /usr/bin/chromium ] || [ ! -x /usr/bin/chromedriver ]; then
+        apt_install "the browser for the web panel's tests (a few minutes)" chromium \
+            chromium-driver ||
+            echo "tests/run.sh: could not install chromium: the browser tests will be skipped" >&2
+    fi
 fi
 
 # resvg-py (a wheel with the resvg renderer compiled in: no system library) lets
 # tests/test_docs.py render the wiring pictures.
-pip_install resvg-py resvg_py 0.5.0 "to render the wiring pictures" \
-    "the pictures' rendering test"
+if selected test_docs; then
+    pip_install resvg-py resvg_py 0.5.0 "to render the wiring pictures" \
+        "the pictures' rendering test"
+fi
 
 passed=0
 failed=0
@@ -66,88 +176,268 @@ note_failure() {
   $1"
 }
 
-# run_module LABEL PASS MODULE: run one module, show its output (all of it if anything failed,
-# else a line, and the skips), add up its counts and note what failed. unittest.main() is
-# called here rather than by the module: micropython-unittest 0.4 ends it with
-# sys.exit(failures > 0), which MicroPython prints and turns into exit 1 even when all passed.
-run_module() {
-    out=$(sh boards/unix.sh -c "import sys, unittest
-sys.path.append('tests')
-try:
-    unittest.main('$3')
-except SystemExit:
-    pass" 2>&1)
-    ran=$(printf '%s\n' "$out" | sed -n 's/^Ran \([0-9]*\) tests*$/\1/p' | tail -n 1)
-    bad=$(printf '%s\n' "$out" | sed -n 's/^FAILED (failures=\([0-9]*\), errors=\([0-9]*\)).*/\1 + \2/p')
-    skip=$(printf '%s\n' "$out" | grep -c '\.\.\. *skipped:')
-    # Each test's line is "NAME (CLASS) ..." then its verdict, which its own output may have
-    # pushed onto a later line; the tracebacks after "Ran N tests" are not read.
-    names=$(printf '%s\n' "$out" | awk '
-        /^Ran [0-9]+ tests?$/ { exit }
-        match($0, /^test[^ ]* \([^ ]*\) \.\.\./) { name = substr($0, 1, RLENGTH - 4) }
-        / FAIL$/ { print name }')
-    bad=$((${bad:-0}))
-    if [ -z "$ran" ] || [ "$bad" != 0 ] || [ -n "$verbose" ]; then
-        printf '%s\n' "$out" | sed "s|^|$1 |"
+# The jobs, numbered in the order they are printed: the modules against lib/*.py, then
+# against the .mpy files, then the style, then the types.
+n=0
+add() {  # KIND NAME
+    n=$((n + 1))
+    eval "kind_$n=$1 name_$n=$2"
+}
+for name in $modules; do
+    add py "$name"
+done
+with_mpy=""
+for name in $modules; do
+    case " $MPY " in *" $name "*) ;; *) [ -n "$mpy_all" ] || continue ;; esac
+    with_mpy="$with_mpy $name"
+done
+if [ -n "$with_mpy" ]; then
+    if sh boards/unix.sh --mpy >/dev/null; then
+        for name in $with_mpy; do
+            add mpy "$name"
+        done
     else
-        echo "$1 $((ran - skip)) passed"
-        printf '%s\n' "$out" | grep -i 'skipped' | sed "s|^|$1 |"
+        echo "mpy-cross failed"
+        note_failure "mpy-cross: the .mpy pass did not run"
+        failed=$((failed + 1))
+    fi
+fi
+for check in style types; do
+    case " $checks " in *" $check "*) add "$check" - ;; esac
+done
+
+# How many at once: as many as there are cores, and one more, since some modules spend most
+# of their time waiting on real time (the examples, the web panel, the browser).
+if [ -z "$jobs" ]; then
+    jobs=$(getconf _NPROCESSORS_ONLN 2>/dev/null || echo 1)
+    jobs=$((jobs + 1))
+fi
+
+# The order they start in: the longest first, each module's .mpy pass after it.
+order=""
+for name in $SLOW; do
+    i=1
+    while [ $i -le $n ]; do
+        eval "[ \"\$name_$i\" = $name ]" && order="$order $i"
+        i=$((i + 1))
+    done
+done
+i=1
+while [ $i -le $n ]; do
+    case " $order " in *" $i "*) ;; *) order="$order $i" ;; esac
+    i=$((i + 1))
+done
+
+# The scratch folder: each job's output (I.out), its exit status (I.rc, once it has ended),
+# the folder it runs in (I.home), and a pipe on which each job says it has ended.
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/busservo-run.XXXXXX") || exit 1
+mkfifo "$tmp/ended" && exec 4<>"$tmp/ended" || exit 1
+
+# kill_tree PID: PID and every process it started, and they started, ...
+kill_tree() {
+    ps -A -o pid= -o ppid= | awk -v root="$1" '
+        { kids[$2] = kids[$2] " " $1 }
+        END {
+            todo = root
+            while (todo != "") {
+                n = split(todo, pids, " ")
+                todo = ""
+                for (i = 1; i <= n; i++) {
+                    print pids[i]
+                    todo = todo " " kids[pids[i]]
+                }
+                if (todo ~ /^ *$/) todo = ""
+            }
+        }' | xargs kill 2>/dev/null
+}
+# On Ctrl-C (which the jobs, started in the background, do not get), a kill, or any exit:
+# stop every job still running, with its process group (what it left in the background: an
+# example, Chromium) and what it started that left the group (a simulator behind a pty).
+stop_jobs() {
+    i=1
+    while [ $i -le $n ]; do
+        eval "pid=\${pid_$i:-}"
+        if [ -n "$pid" ] && [ ! -e "$tmp/$i.rc" ]; then
+            group=$(cat "$tmp/$i.pid" 2>/dev/null)
+            kill_tree "$pid"
+            [ -n "$group" ] && kill -- "-$group" 2>/dev/null
+        fi
+        i=$((i + 1))
+    done
+    rm -rf "$tmp"
+}
+trap 'trap - INT TERM; exit 130' INT
+trap 'trap - INT TERM; exit 143' TERM
+trap 'stop_jobs' EXIT
+
+# The unittest run of module $1, as `sh boards/unix.sh -c` takes it. unittest.main() is
+# called here rather than by the module: micropython-unittest 0.4 ends it with
+# sys.exit(failures > 0), which MicroPython prints and turns into exit 1 even when all
+# passed. With -k (RUN_SH_K), unittest 0.4 finds a test case's tests with dir(): a dir() of
+# unittest's own lists those -k picks and no other. Its last line gives the counts (what
+# the tests print may hold other runs' summaries: a failed browser test prints Selenium's).
+snippet() {
+    echo "import os, sys, unittest
+sys.path.append('tests')
+k = os.getenv('RUN_SH_K')
+if k:
+    def picked(o, dir=dir):
+        names = dir(o)
+        if isinstance(o, unittest.TestCase):
+            c = type(o).__name__
+            names = [t for t in names if t[:4] != 'test' or k in t or k in c]
+        return names
+
+    unittest.dir = picked
+results = []
+run = unittest.TestRunner.run
+unittest.TestRunner.run = lambda self, suite: results.append(run(self, suite)) or results[-1]
+try:
+    unittest.main('$1')
+except SystemExit:
+    pass
+r = results[-1]
+print('$COUNTS', r.testsRun, r.failuresNum + r.errorsNum, r.skippedNum)"
+}
+
+# run_job I: job I, its output to I.out, then its exit status to I.rc; then it says so. It
+# runs in a process group of its own (I.pid), for stop().
+run_job() {
+    i=$1
+    eval "kind=\$kind_$i name=\$name_$i"
+    home=$tmp/$i.home
+    mkdir "$home"
+    nice=""
+    case " $NICE " in *" $name "*) nice="nice -n 10" ;; esac
+    lib=""
+    [ "$kind" = mpy ] && lib=.venv/mpy
+    case $kind in
+    py | mpy)
+        set -- env HOME="$home" TMPDIR="$home" BUSSERVO_LIB="$lib" $nice \
+            sh boards/unix.sh -c "$(snippet "$name")"
+        ;;
+    style)
+        set -- sh -c ".venv/bin/ruff check -q --no-cache $CODE &&
+            .venv/bin/ruff format -q --no-cache --check $CODE"
+        ;;
+    types) set -- sh tests/typecheck.sh ;;
+    esac
+    .venv/bin/python -c 'import os, sys
+os.setpgid(0, 0)
+os.execvp(sys.argv[1], sys.argv[1:])' "$@" </dev/null >"$tmp/$i.out" 2>&1 4>&- &
+    echo $! >"$tmp/$i.pid"
+    wait $!
+    echo $? >"$tmp/$i.rc"
+    rm -rf "$home"
+    echo "$i" >&4
+}
+
+# show I: print job I's result, add up its counts and note what failed.
+show() {
+    eval "kind=\$kind_$1 name=\$name_$1"
+    out=$(cat "$tmp/$1.out")
+    rc=$(cat "$tmp/$1.rc")
+    case $kind in
+    style)
+        if [ "$rc" = 0 ]; then
+            echo "style: ruff ... ok"
+            passed=$((passed + 1))
+        else
+            printf '%s\n' "$out"
+            echo "style: ruff ... FAIL (see above; '.venv/bin/ruff format $CODE')"
+            note_failure "style: ruff (see its output above)"
+            failed=$((failed + 1))
+        fi
+        return
+        ;;
+    types)
+        # The examples and board files type-check against the driver's stubs (lib/*.pyi),
+        # as a maker's editor sees them.
+        if [ "$rc" = 0 ]; then
+            echo "types: mypy ... ok"
+            passed=$((passed + 1))
+        else
+            printf '%s\n' "$out"
+            echo "types: mypy ... FAIL (see above)"
+            note_failure "types: mypy (see its output above)"
+            failed=$((failed + 1))
+        fi
+        return
+        ;;
+    py) label="$name:" pass=.py ;;
+    mpy) label="$name (.mpy):" pass=.mpy ;;
+    esac
+    # The counts: the snippet's last line, if the module ran to its end (then not shown).
+    ran=""
+    last=$(printf '%s\n' "$out" | tail -n 1)
+    case $last in
+    "$COUNTS "*)
+        set -f
+        set -- $last
+        set +f
+        ran=$2 bad=$3 skip=$4
+        out=$(printf '%s\n' "$out" | sed '$d')
+        ;;
+    esac
+    # Each test's line is "NAME (CLASS) ..." then its verdict, which its own output may have
+    # pushed onto a later line. The tracebacks after unittest's "Ran N tests" are not read:
+    # that line comes after N tests' lines (a test may print another run's before).
+    names=$(printf '%s\n' "$out" | awk -v ran="${ran:--1}" '
+        $0 ~ "^Ran " ran " tests?$" && tests == ran { exit }
+        match($0, /^test[^ ]* \([^ ]*\) \.\.\./) { name = substr($0, 1, RLENGTH - 4); tests++ }
+        / FAIL$/ { print name }')
+    [ -n "$pattern" ] && [ "$ran" = 0 ] && return # -k picked none of its tests
+    if [ -z "$ran" ] || [ "$bad" != 0 ] || [ -n "$verbose" ]; then
+        printf '%s\n' "$out" | sed "s|^|$label |"
+    else
+        echo "$label $((ran - skip)) passed"
+        printf '%s\n' "$out" | grep -i 'skipped' | sed "s|^|$label |"
     fi
     if [ -z "$ran" ]; then
-        echo "$1 did not run to its end"
+        echo "$label did not run to its end"
         last=$(printf '%s\n' "$out" | sed -n 's/^\(test[^ ]* ([^ ]*)\) \.\.\..*/\1/p' | tail -n 1)
-        note_failure "$3 ($2): did not run to its end${last:+, in $last}"
+        note_failure "$name ($pass): did not run to its end${last:+, in $last}"
         failed=$((failed + 1))
         return
     fi
     passed=$((passed + ran - bad - skip))
     failed=$((failed + bad))
     skipped=$((skipped + skip))
-    while IFS= read -r name; do
-        [ -z "$name" ] || note_failure "$3 ($2): $name"
+    while IFS= read -r test; do
+        [ -z "$test" ] || note_failure "$name ($pass): $test"
     done <<EOF
 $names
 EOF
 }
 
-for t in tests/test_*.py; do
-    name=$(basename "$t" .py)
-    run_module "$name:" .py "$name"
-done
-
-# Again, against lib/ compiled by mpy-cross -O3 and nothing else: the form most boards run.
-if sh boards/unix.sh --mpy >/dev/null; then
-    for t in tests/test_*.py; do
-        name=$(basename "$t" .py)
-        BUSSERVO_LIB=.venv/mpy run_module "$name (.mpy):" .mpy "$name"
+# Start the jobs, at most $jobs at once, and print each job's result once it and all the
+# jobs before it have ended.
+RUN_SH_K=$pattern  # (empty: every test, whatever a run.sh that runs this one was given)
+export RUN_SH_K
+shown=1
+show_ended() {
+    while [ $shown -le $n ] && [ -e "$tmp/$shown.rc" ]; do
+        show $shown
+        shown=$((shown + 1))
     done
-else
-    echo "mpy-cross failed"
-    note_failure "mpy-cross: the .mpy pass did not run"
-    failed=$((failed + 1))
-fi
-
-# One style for all the code (.ruff.toml): counted as one test.
-CODE="lib tests examples boards"
-if .venv/bin/ruff check -q $CODE && .venv/bin/ruff format -q --check $CODE; then
-    echo "style: ruff ... ok"
-    passed=$((passed + 1))
-else
-    echo "style: ruff ... FAIL (see above; '.venv/bin/ruff format $CODE')"
-    note_failure "style: ruff (see its output above)"
-    failed=$((failed + 1))
-fi
-
-# The examples and board files type-check against the driver's stubs (lib/*.pyi), as a
-# maker's editor sees them: counted as one test.
-if sh tests/typecheck.sh; then
-    echo "types: mypy ... ok"
-    passed=$((passed + 1))
-else
-    echo "types: mypy ... FAIL (see above)"
-    note_failure "types: mypy (see its output above)"
-    failed=$((failed + 1))
-fi
+}
+running=0
+for i in $order; do
+    while [ $running -ge "$jobs" ]; do
+        read -r _ <&4
+        running=$((running - 1))
+        show_ended
+    done
+    run_job "$i" &
+    eval "pid_$i=$!"
+    running=$((running + 1))
+done
+while [ $running -gt 0 ]; do
+    read -r _ <&4
+    running=$((running - 1))
+    show_ended
+done
+show_ended
 
 # What failed, by name, just above the counts (which CI reads from the very last line).
 if [ -n "$failures" ]; then

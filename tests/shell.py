@@ -5,11 +5,26 @@ import time
 
 MICROPYTHON = ".venv/bin/micropython"
 MPREMOTE = ".venv/bin/mpremote"
+PYTHON = os.getcwd() + "/.venv/bin/python"  # CPython (tests start in the repository's root)
 
 
 def scratch(name):
-    """A fresh path under /tmp for this run."""
-    return "/tmp/busservo-%s-%s" % (name, "".join("%02x" % b for b in os.urandom(4)))
+    """A fresh path in $TMPDIR (else /tmp) for this run."""
+    tmp = os.getenv("TMPDIR") or "/tmp"
+    return "%s/busservo-%s-%s" % (tmp, name, "".join("%02x" % b for b in os.urandom(4)))
+
+
+def free_port():
+    """A TCP port on 127.0.0.1 that nothing listens on: the one the OS gives a bind to port 0
+    (asked from CPython: MicroPython's sockets do not say which port they were given), so that
+    two runs of the tests at once never serve on the same port."""
+    ok, out = sh(
+        PYTHON + " -c 'import socket; s = socket.socket(); "
+        's.bind(("127.0.0.1", 0)); print(s.getsockname()[1])\''
+    )
+    if not ok:
+        raise OSError("no free port: " + out)
+    return int(out)
 
 
 def sh(command):
@@ -20,6 +35,24 @@ def sh(command):
         text = f.read()
     os.remove(out)
     return status == 0, text
+
+
+def sh_all(commands):
+    """Run the commands at once, each with sh as sh() does: [(ok, what it printed)] in their
+    order. For commands that spend their time waiting (an example's moves, on real time)."""
+    base = scratch("all")
+    os.mkdir(base)
+    for i, command in enumerate(commands):
+        each = "%s/%d" % (base, i)
+        os.system("( (%s) >%s.out 2>&1; echo $? >%s.rc ) </dev/null &" % (command, each, each))
+    done = []
+    for i in range(len(commands)):
+        each = "%s/%d" % (base, i)
+        status = wait_for(each + ".rc", 10 * 60 * 1000, "\n")
+        with open(each + ".out") as f:
+            done.append((status is not None and status.strip() == "0", f.read()))
+    os.system("rm -rf " + base)
+    return done
 
 
 def start(command, log):

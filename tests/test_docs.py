@@ -147,13 +147,16 @@ class Pages(unittest.TestCase):
             line.rstrip() for line in block(read("docs/repl.md"), "## The session", "```text")
         ]
         shown = shown[[line.startswith(">>> ") for line in shown].index(True) :]
-        typed = scratch("typed")
+        # In a home of its own: the REPL keeps its history there (.micropython.history).
+        home = scratch("home")
+        os.mkdir(home)
+        typed = home + "/typed"
         with open(typed, "w") as f:
             f.write("".join(line[4:] + "\n" for line in shown if line.startswith(">>> ")))
         try:
-            ok, out = sh('sh boards/unix.sh -i -c "" <%s' % typed)
+            ok, out = sh('HOME=%s sh boards/unix.sh -i -c "" <%s' % (home, typed))
         finally:
-            os.remove(typed)
+            sh("rm -rf " + home)
         self.assertTrue(ok, out)
         got = [line.rstrip() for line in out.split("\n")]
         got = got[[line.startswith(">>> ") for line in got].index(True) :]

@@ -5,7 +5,9 @@
 import os
 import unittest
 
-from shell import scratch, sh
+from shell import free_port, scratch, sh, sh_all
+
+REPO = os.getcwd()  # tests/run.sh runs every test from the repository's root
 
 OPT_IN = "I_HAVE_CHECKED_MY_ROBOT"
 SIMULATED = "no board.py found: using the simulated controller, nothing real moves"
@@ -25,24 +27,60 @@ EXPECT = {
     "stream.py": "updates/s (the wire's limit for 6 servos: 38.4)",
     "teach.py": "the joints are limp: pose the robot by hand",
     "unload.py": "posed at",
-    "web_panel.py": "open http://127.0.0.1:18099/ and log in with the password test-pw-1",
+    "web_panel.py": "open http://127.0.0.1:PORT/ and log in with the password test-pw-1",
 }
 
 # The examples that run until Ctrl-C, with their arguments: run for a few seconds, then
 # stopped by a SIGINT, as a Ctrl-C would (exit status 130). Nothing moves until a browser
-# asks: tests/test_web.py and tests/browser.py drive the panel.
-FOR_EVER = {"web_panel.py": "--port 18099 --password test-pw-1"}
+# asks: tests/test_web.py and tests/browser.py drive the panel. PORT: a free one.
+FOR_EVER = {"web_panel.py": "--port PORT --password test-pw-1"}
 
 
-def command(example):
-    """The shell command that runs example (a path) as the tests do."""
+def command(example, folder):
+    """The shell command that runs example (a path) as the tests do, from folder (where an
+    example keeps what it saves, such as teach.json), and what it prints when it has done its
+    work: (command, text)."""
     name = example.rpartition("/")[2]
+    run = "cd %s && sh %s/boards/unix.sh %s" % (folder, REPO, example)
     if name not in FOR_EVER:
-        return "sh boards/unix.sh " + example
-    return "timeout -s INT --preserve-status 3 sh boards/unix.sh %s %s; [ $? = 130 -o $? = 0 ]" % (
+        return run, EXPECT[name]
+    port = str(free_port())
+    run = "cd %s && timeout -s INT --preserve-status 3 sh %s/boards/unix.sh %s %s" % (
+        folder,
+        REPO,
         example,
-        FOR_EVER[name],
+        FOR_EVER[name].replace("PORT", port),
     )
+    return run + "; [ $? = 130 -o $? = 0 ]", EXPECT[name].replace("PORT", port)
+
+
+def example(name):
+    """examples/name, as a path from any folder."""
+    return "%s/examples/%s" % (REPO, name)
+
+
+def run_all(runs):
+    """Run each (example's path, Board or None) of runs, all at once, each from a scratch
+    folder of its own (where an example keeps what it saves: teach.json), with the board's
+    board.py on MICROPYPATH: [(ok, what it printed, what it prints once it has done its
+    work)], in order. An example spends its time waiting on real time (its moves): together
+    they take as long as the longest."""
+    folders = []
+    commands = []
+    texts = []
+    for path, board in runs:
+        folder = scratch("example")
+        os.mkdir(folder)
+        folders.append(folder)
+        run, text = command(path, folder)
+        if board:
+            run = "export MICROPYPATH=%s; %s" % (board.dir, run)
+        commands.append(run)
+        texts.append(text)
+    try:
+        return [(ok, out, text) for (ok, out), text in zip(sh_all(commands), texts)]
+    finally:
+        sh("rm -rf " + " ".join(folders))
 
 
 # The examples that move servos (or let them go limp); the others move nothing.
@@ -94,8 +132,9 @@ class Board:
         return path
 
     def run(self, example):
-        """Run example (a path) with this board.py on MICROPYPATH: (ok, what it printed)."""
-        return sh("export MICROPYPATH=%s; %s" % (self.dir, command(example)))
+        """Run example (a path) with this board.py on MICROPYPATH: (ok, what it printed,
+        what it prints once it has done its work)."""
+        return run_all([(example, self)])[0]
 
     def commands(self):
         """[(cmd, params)] the controller took, in order."""
@@ -135,8 +174,8 @@ class Examples(unittest.TestCase):
                 self.assertTrue(first.startswith("# Moves nothing: "), name)
 
     def test_with_no_board_py_each_runs_on_the_simulator_and_says_so_first(self):
-        for name, text in EXPECT.items():
-            ok, out = sh(command("examples/" + name))
+        runs = run_all([(example(name), None) for name in EXPECT])
+        for name, (ok, out, text) in zip(EXPECT, runs):
             self.assertTrue(ok, name + ": " + out)
             self.assertEqual(out.split("\n")[0], SIMULATED, name)
             self.assertIn(text, out, name)
@@ -150,8 +189,8 @@ class Examples(unittest.TestCase):
         for text, error in broken.items():
             board = Board(text)
             try:
-                for name in EXPECT:
-                    ok, out = board.run("examples/" + name)
+                runs = run_all([(example(name), board) for name in EXPECT])
+                for name, (ok, out, _) in zip(EXPECT, runs):
                     self.assertFalse(ok, name + ": " + out)
                     self.assertIn("ImportError: ", out, name)
                     self.assertIn(error, out, name)
@@ -164,10 +203,10 @@ class Examples(unittest.TestCase):
         try:
             for name in EXPECT:
                 if name not in MOVING:
-                    ok, out = board.run("examples/" + name)
+                    ok, out, text = board.run(example(name))
                     self.assertTrue(ok, name + ": " + out)
                     self.assertIn("talking to <Logged object", out.split("\n")[0], name)
-                    self.assertIn(EXPECT[name], out, name)
+                    self.assertIn(text, out, name)
             commands = board.commands()
             self.assertEqual([cmd for cmd, _ in commands if cmd in MOVES], [])
             for cmd, params in commands:
@@ -177,31 +216,32 @@ class Examples(unittest.TestCase):
             board.remove()
 
     def test_on_a_board_nothing_moves_until_the_user_opts_in(self):
-        for name in MOVING:
-            board = Board()
-            try:
-                ok, out = board.run("examples/" + name)
+        boards = [Board() for _ in MOVING]
+        try:
+            runs = run_all([(example(name), board) for name, board in zip(MOVING, boards)])
+            for name, board, (ok, out, text) in zip(MOVING, boards, runs):
                 self.assertTrue(ok, name + ": " + out)
                 self.assertIn("talking to <Logged object", out.split("\n")[0], name)
                 self.assertIn("500", out, name)  # where the servos are, read first
                 self.assertIn("this ", out, name)  # what it would do
                 self.assertIn("nothing moved", out, name)
                 self.assertIn("set %s = True" % OPT_IN, out, name)  # how to opt in
-                self.assertFalse(EXPECT[name] in out, name)
+                self.assertFalse(text in out, name)
                 taken = [MOVES[cmd] for cmd, _ in board.commands() if cmd in MOVES]
                 self.assertEqual(taken, [], name)
-            finally:
+        finally:
+            for board in boards:
                 board.remove()
 
     def test_on_a_board_with_the_opt_in_moves_take_2_s_or_more(self):
-        for name in MOVING:
-            if name in FOR_EVER:
-                continue  # it moves what a browser asks: tests/test_web.py
-            board = Board()
-            try:
-                ok, out = board.run(board.opted_in(name))
+        # (web_panel.py moves what a browser asks: tests/test_web.py)
+        names = [name for name in MOVING if name not in FOR_EVER]
+        boards = [Board() for _ in names]
+        try:
+            runs = run_all([(board.opted_in(name), board) for name, board in zip(names, boards)])
+            for name, board, (ok, out, text) in zip(names, boards, runs):
                 self.assertTrue(ok, name + ": " + out)
-                self.assertIn(EXPECT[name], out, name)
+                self.assertIn(text, out, name)
                 self.assertFalse("nothing moved" in out, name)
                 commands = board.commands()
                 self.assertTrue([cmd for cmd, _ in commands if cmd in MOVES], name)
@@ -218,7 +258,8 @@ class Examples(unittest.TestCase):
                         far = abs(position - at.get(servo, 500))
                         self.assertTrue(name not in MOTION or far <= ms * 125 // 1000 + 1, params)
                         at[servo] = position
-            finally:
+        finally:
+            for board in boards:
                 board.remove()
 
     def test_ctrl_c_stops_the_group_that_runs_for_ever(self):
@@ -242,7 +283,7 @@ class Examples(unittest.TestCase):
     def test_check_wiring_lists_the_likely_causes_of_silence_in_order(self):
         board = Board(silent=True)
         try:
-            ok, out = board.run("examples/check_wiring.py")
+            ok, out, _ = board.run(example("check_wiring.py"))
         finally:
             board.remove()
         self.assertFalse(ok, out)  # exit status 1: a script or a CI can tell
@@ -289,20 +330,24 @@ class WebPanel(unittest.TestCase):
             self.assertFalse("Traceback" in out, out)
 
     def test_port_given_as_port_equals_n_is_taken(self):
-        ok, out = self.run_panel("--port=18098 --password test-pw-2")
-        self.assertIn("open http://127.0.0.1:18098/ and log in with the password test-pw-2", out)
+        port = free_port()
+        ok, out = self.run_panel("--port=%d --password test-pw-2" % port)
+        self.assertIn(
+            "open http://127.0.0.1:%d/ and log in with the password test-pw-2" % port, out
+        )
 
     def test_a_port_in_use_is_said_plainly_and_the_address_is_not_printed(self):
+        port = free_port()
         sh(
-            "timeout -s INT 4 sh boards/unix.sh examples/web_panel.py --port 18097 "
-            "--password test-pw-3 >/dev/null 2>&1 &"
+            "timeout -s INT 4 sh boards/unix.sh examples/web_panel.py --port %d "
+            "--password test-pw-3 >/dev/null 2>&1 &" % port
         )
         sh("sleep 1.5")
-        ok, out = self.run_panel("--port 18097 --password test-pw-3")
+        ok, out = self.run_panel("--port %d --password test-pw-3" % port)
         self.assertFalse(ok)
         self.assertEqual(
             out.strip().split("\n")[-1],
-            "port 18097 is in use (another panel?): give another with --port N",
+            "port %d is in use (another panel?): give another with --port N" % port,
             out,
         )
         self.assertFalse("open http" in out or "Traceback" in out, out)

@@ -79,6 +79,18 @@ def wait_until(path, text, ms):
     return None
 
 
+def wait_until_false(test, ms):
+    """True once test() is false, or False if it is still true after ms."""
+    import time
+
+    start = time.ticks_ms()
+    while test():
+        if time.ticks_diff(time.ticks_ms(), start) > ms:
+            return False
+        time.sleep_ms(20)
+    return True
+
+
 def ended(base, pid, ms=10000):
     """The exit status of what launch() started (killed if it has not ended in ms)."""
     rc = wait_until(base + ".rc", "\n", ms)
@@ -126,7 +138,9 @@ class FromAnyFolder(unittest.TestCase):
         for script, said in (("robot.py", "BusServo"), ("uses.py", "beside it")):
             ok, out = sh("cd %s && sh %s %s" % (d, UNIX_SH, script))
             self.assertEqual((ok, out), (True, said + "\n"), script)
-        ok, out = sh("cd %s && echo 'import busservo; busservo.BusServo' | sh %s" % (d, UNIX_SH))
+        # (HOME: the REPL keeps its history there, in this test's folder)
+        command = "cd %s && echo 'import busservo; busservo.BusServo' | HOME=%s sh %s"
+        ok, out = sh(command % (d, d, UNIX_SH))
         self.assertTrue(ok, out)
         self.assertIn("<class 'BusServo'>", out)  # the REPL too
 
@@ -359,52 +373,201 @@ class Fine(unittest.TestCase):
 """
 
 
-class RunSh(unittest.TestCase):
-    def test_the_summary_names_each_failed_test_and_its_pass(self):
-        # tests/run.sh in a checkout of its own, with the set-up borrowed from
-        # this one and two test modules that fail in every way they can.
-        repo = folder("suite")
+# A module that runs beside another or fails: each says it has started, then waits (10 s at
+# most) for what the other says.
+TOGETHER = """import os
+import time
+import unittest
+
+HERE = %r
+
+
+def say(name):
+    open(HERE + "/" + name, "w").close()
+
+
+def heard(name):
+    for _ in range(500):
         try:
-            for sub in ("boards", "tests", "lib", "examples", ".venv"):
-                os.mkdir(repo + "/" + sub)
-            ok, out = sh(
-                "cp boards/unix.sh {0}/boards/ && cp tests/run.sh {0}/tests/ && "
-                "cp .ruff.toml .venv/ready {0}/ && mv {0}/ready {0}/.venv/ && "
-                "ln -s {1}/.venv/bin {0}/.venv/bin && "
-                "ln -s {1}/.venv/micropython {0}/.venv/micropython".format(repo, REPO)
-            )
-            self.assertTrue(ok, out)
-            write(repo + "/lib/driver.py", "X = 1\n")
-            write(repo + "/tests/typecheck.sh", "exit 0\n")  # the types: not what is tested
-            write(repo + "/tests/test_mixed.py", MIXED)
-            write(repo + "/tests/test_dies.py", DIES)  # `import os`, unused: style fails too
-            write(repo + "/tests/test_fine.py", FINE)
-            ok, out = sh("unset BUSSERVO_LIB MICROPYPATH; sh %s/tests/run.sh" % repo)
-            self.assertFalse(ok)
-            lines = out.rstrip("\n").split("\n")
-            self.assertEqual(lines[-1], "7 passed, 7 failed", out)
-            self.assertIn("test_mixed: test_good (Mixed) ... ok", lines)  # a failed module: all
-            self.assertIn("test_fine: 2 passed", lines)  # a module that passed: one line
-            self.assertIn("test_fine (.mpy): 2 passed", lines)
-            self.assertFalse("test_fine: test_one (Fine) ... ok" in lines)
-            last = max(i for i, line in enumerate(lines) if line.startswith("types: mypy"))
-            summary = lines[last + 1 : -1]
-            for words in (
-                ("test_mixed", "test_bad", "(.py)"),
-                ("test_mixed", "test_bad", "(.mpy)"),
-                ("test_mixed", "test_noisy_error", "(.py)"),
-                ("test_mixed", "test_noisy_error", "(.mpy)"),
-                ("test_dies", "test_dies", "(.py)"),
-                ("test_dies", "test_dies", "(.mpy)"),
-                ("style",),
-            ):
-                found = [s for s in summary if all(w in s for w in words)]
-                self.assertEqual(len(found), 1, "%s in %s" % (words, summary))
-            self.assertTrue(len(summary) <= 9, summary)
-            ok, out = sh("unset BUSSERVO_LIB MICROPYPATH; sh %s/tests/run.sh -v" % repo)
-            self.assertIn("test_fine: test_one (Fine) ... ok", out.split("\n"))  # -v: every test
-        finally:
-            sh("rm -rf " + repo)
+            os.stat(HERE + "/" + name)
+            return True
+        except OSError:
+            time.sleep_ms(20)
+    return False
+
+
+class Together(unittest.TestCase):
+    def test_together(self):
+        say(%r)
+        self.assertTrue(heard(%r))
+        %s
+"""
+
+
+# A module whose tests print other runs' summaries, as a failed browser test prints
+# Selenium's: its own counts are still its own.
+NOISY = """import unittest
+
+
+class Noisy(unittest.TestCase):
+    def test_prints_other_runs_summaries(self):
+        print("Ran 3 tests\\n\\nFAILED (failures=2, errors=1)")
+        print("Ran 4 tests\\n\\nFAILED (failures=1, errors=0)")
+
+    def test_fails_saying_so(self):
+        self.fail("Ran 5 tests\\n\\nFAILED (failures=2, errors=2)")
+"""
+
+
+# A module that leaves a process running in the background (its pid in the file "sleeper"),
+# then waits.
+SLOW = """import os
+import time
+import unittest
+
+
+class Slow(unittest.TestCase):
+    def test_slow(self):
+        os.system("sleep 600 >/dev/null 2>&1 & echo $! >%s/sleeper")
+        time.sleep(600)
+"""
+
+
+class RunSh(unittest.TestCase):
+    # tests/run.sh in a checkout of its own, with the set-up borrowed from this one and two
+    # test modules that fail in every way they can, and one that passes.
+    def setUp(self):
+        repo = self.repo = folder("suite")
+        for sub in ("boards", "tests", "lib", "examples", ".venv"):
+            os.mkdir(repo + "/" + sub)
+        ok, out = sh(
+            "cp boards/unix.sh {0}/boards/ && cp tests/run.sh {0}/tests/ && "
+            "cp .ruff.toml .venv/ready {0}/ && mv {0}/ready {0}/.venv/ && "
+            "ln -s {1}/.venv/bin {0}/.venv/bin && "
+            "ln -s {1}/.venv/micropython {0}/.venv/micropython".format(repo, REPO)
+        )
+        self.assertTrue(ok, out)
+        write(repo + "/lib/driver.py", "X = 1\n")
+        write(repo + "/tests/typecheck.sh", "exit 0\n")  # the types: not what is tested
+        write(repo + "/tests/test_mixed.py", MIXED)
+        write(repo + "/tests/test_dies.py", DIES)  # `import os`, unused: style fails too
+        write(repo + "/tests/test_fine.py", FINE)
+
+    def tearDown(self):
+        sh("rm -rf " + self.repo)
+
+    def run_sh(self, args=""):
+        """(ok, its lines) of tests/run.sh args, in the checkout of its own."""
+        ok, out = sh("unset BUSSERVO_LIB MICROPYPATH; sh %s/tests/run.sh %s" % (self.repo, args))
+        return ok, out.rstrip("\n").split("\n")
+
+    def test_the_summary_names_each_failed_test_and_its_pass(self):
+        ok, lines = self.run_sh("--mpy-all")  # every module against the .mpy files too
+        out = "\n".join(lines)
+        self.assertFalse(ok)
+        self.assertEqual(lines[-1], "7 passed, 7 failed", out)
+        self.assertIn("test_mixed: test_good (Mixed) ... ok", lines)  # a failed module: all
+        self.assertIn("test_fine: 2 passed", lines)  # a module that passed: one line
+        self.assertIn("test_fine (.mpy): 2 passed", lines)
+        self.assertFalse("test_fine: test_one (Fine) ... ok" in lines)
+        last = max(i for i, line in enumerate(lines) if line.startswith("types: mypy"))
+        summary = lines[last + 1 : -1]
+        for words in (
+            ("test_mixed", "test_bad", "(.py)"),
+            ("test_mixed", "test_bad", "(.mpy)"),
+            ("test_mixed", "test_noisy_error", "(.py)"),
+            ("test_mixed", "test_noisy_error", "(.mpy)"),
+            ("test_dies", "test_dies", "(.py)"),
+            ("test_dies", "test_dies", "(.mpy)"),
+            ("style",),
+        ):
+            found = [s for s in summary if all(w in s for w in words)]
+            self.assertEqual(len(found), 1, "%s in %s" % (words, summary))
+        self.assertTrue(len(summary) <= 9, summary)
+        ok, lines = self.run_sh("-v")
+        self.assertIn("test_fine: test_one (Fine) ... ok", lines)  # -v: every test
+        # The .mpy pass runs only the modules run.sh's MPY names: none of these.
+        self.assertEqual(lines[-1], "4 passed, 4 failed", lines)
+        self.assertFalse([line for line in lines if "(.mpy)" in line], lines)
+
+    def test_modules_named_run_alone_in_the_order_given(self):
+        ok, lines = self.run_sh("tests/test_fine.py test_mixed")  # a path, or a name
+        self.assertFalse(ok)
+        self.assertEqual(lines[-1], "3 passed, 2 failed", lines)
+        self.assertEqual(lines[0], "test_fine: 2 passed")
+        self.assertFalse([line for line in lines if "test_dies" in line or ": ruff" in line])
+        self.assertEqual(
+            self.run_sh("test_fine"), (True, ["test_fine: 2 passed", "2 passed, 0 failed"])
+        )
+        ok, lines = self.run_sh("style")
+        self.assertEqual(
+            (ok, lines[-2:]),
+            (False, ["  style: ruff (see its output above)", "0 passed, 1 failed"]),
+        )
+
+    def test_k_runs_the_tests_whose_name_or_class_holds_the_pattern(self):
+        self.assertEqual(
+            self.run_sh("-k good"), (True, ["test_mixed: 1 passed", "1 passed, 0 failed"])
+        )
+        self.assertEqual(
+            self.run_sh("-k Fine"), (True, ["test_fine: 2 passed", "2 passed, 0 failed"])
+        )
+        # No test of that name: nothing but the summary, no style nor types.
+        self.assertEqual(self.run_sh("-k no_such_test"), (True, ["0 passed, 0 failed"]))
+        ok, lines = self.run_sh("-k bad test_mixed test_fine")
+        self.assertEqual((ok, lines[-1]), (False, "0 passed, 1 failed"), lines)
+
+    def test_modules_run_at_once_and_are_printed_in_their_order(self):
+        # test_first ends after test_second, yet is printed first. One at a time, neither
+        # would hear from the other.
+        first = TOGETHER % (self.repo, "first started", "second started", 'heard("second ended")')
+        second = TOGETHER % (self.repo, "second started", "first started", 'say("second ended")')
+        write(self.repo + "/tests/test_first.py", first)
+        write(self.repo + "/tests/test_second.py", second)
+        self.assertEqual(
+            self.run_sh("-j 2 test_first test_second"),
+            (True, ["test_first: 1 passed", "test_second: 1 passed", "2 passed, 0 failed"]),
+        )
+
+    def test_a_module_that_prints_other_runs_summaries_is_counted_by_its_own(self):
+        write(self.repo + "/tests/test_noisy.py", NOISY)
+        ok, lines = self.run_sh("test_noisy")
+        self.assertFalse(ok)
+        self.assertEqual(
+            lines[-3:],
+            ["Failed:", "  test_noisy (.py): test_fails_saying_so (Noisy)", "1 passed, 1 failed"],
+            lines,
+        )
+
+    def test_ctrl_c_stops_each_module_and_what_it_left_running(self):
+        write(self.repo + "/tests/test_slow.py", SLOW % self.repo)
+        base = self.repo + "/run"
+        pid = launch("sh %s/tests/run.sh test_slow" % self.repo, base, terminal=True)
+        sleeper = wait_until(self.repo + "/sleeper", "\n", 15000)
+        self.assertTrue(sleeper, read(base + ".log"))
+        os.system("kill -s INT -- -%d" % pid)  # Ctrl-C
+        self.assertEqual(ended(base, pid), 130, read(base + ".log"))
+        # Gone (once reaped: a process just killed may linger a moment as a zombie).
+        alive = "ps -o stat= -p %s | grep -qv Z" % sleeper.strip()
+        gone = wait_until_false(lambda: sh(alive)[0], 5000)
+        os.system("kill %s 2>/dev/null" % sleeper.strip())
+        self.assertTrue(gone, "the module's sleeper is still running")
+
+    def test_bad_arguments_are_refused_saying_why(self):
+        for args, said in (
+            ("test_nothing", "no test module test_nothing (no tests/test_nothing.py)"),
+            ("tests/fine.py", "no test module tests/fine.py: a module's name starts test_"),
+            ("-x", "no option -x"),
+            ("-k", "-k wants a PATTERN"),
+            ("-j 0", "-j wants a number of modules at once, 1 or more, got '0'"),
+        ):
+            ok, lines = self.run_sh(args)
+            self.assertFalse(ok, args)
+            self.assertEqual(lines, ["tests/run.sh: %s (sh tests/run.sh --help)" % said], args)
+        ok, lines = self.run_sh("--help")
+        self.assertTrue(ok, lines)
+        for form in ("run.sh test_frames", "run.sh -k ", "run.sh -v", "run.sh -j ", "--mpy-all"):
+            self.assertTrue([line for line in lines if form in line], form)
 
 
 class Modes(unittest.TestCase):

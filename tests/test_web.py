@@ -14,10 +14,10 @@ import busservo_motion as bm
 import busservo_web
 import web_world
 from busservo import CMD_ACTION_GROUP_STOP, CMD_MULT_SERVO_UNLOAD, CMD_SERVO_MOVE
+from shell import free_port, scratch, sh
 from web_world import http, login
 
 PASSWORD = "secret-pw"
-_ports = iter(range(18100, 18400))
 MOVING = (CMD_SERVO_MOVE, CMD_MULT_SERVO_UNLOAD, CMD_ACTION_GROUP_STOP)
 
 # Every route of the panel but the page and the login: (method, path, body).
@@ -55,7 +55,7 @@ def run(scenario):
     """Run scenario(port, world, robot) against a panel served on a fresh world."""
     world = web_world.live()
     robot = web_world.robot(world)
-    port = next(_ports)
+    port = free_port()  # no other run's, at the same time
 
     async def main():
         server = asyncio.create_task(busservo_web.serve(robot, PASSWORD, port))
@@ -68,6 +68,21 @@ def run(scenario):
 
     asyncio.new_event_loop()
     asyncio.run(main())
+
+
+def away(scenario):
+    """run(scenario) with the panel keeping its sequences in a scratch folder of its own, made
+    and removed here, rather than in sequences/ of the folder the tests run in: the checkout,
+    which another run of the tests may be using at the same time."""
+    folder = scratch("web")
+    os.mkdir(folder)
+    kept = busservo_web._FOLDER
+    busservo_web._FOLDER = folder + "/sequences"
+    try:
+        run(scenario)
+    finally:
+        busservo_web._FOLDER = kept
+        sh("rm -rf " + folder)
 
 
 async def until(test, ms=2000):
@@ -406,7 +421,7 @@ class BadInput(Tidy):
             status, reply = await http(port, "POST", "/api/load", {"name": "nothing"}, token)
             self.assertEqual((status, reply["error"]), (404, "no sequence 'nothing'"))
 
-        run(scenario)
+        away(scenario)
 
 
 class Driving(Tidy):
@@ -515,9 +530,9 @@ class Driving(Tidy):
         async def scenario(port, world, robot):
             token = await armed(port)
             await http(port, "POST", "/api/limp", {}, token)  # all four let go
-            os.mkdir("sequences")
+            os.mkdir(busservo_web._FOLDER)
             bm.Sequence([({"base": -40}, 300), ({"base": 40}, 20000)]).save(
-                "sequences/base_only.json"
+                busservo_web._FOLDER + "/base_only.json"
             )
             status, reply = await http(port, "POST", "/api/load", {"name": "base_only"}, token)
             self.assertEqual(status, 200, reply)
@@ -531,14 +546,7 @@ class Driving(Tidy):
             self.assertEqual((halt[3], halt[5] | halt[6] << 8, halt[7]), (CMD_SERVO_MOVE, 100, 1))
             self.assertEqual(world.sim.limp, {2, 3, 4})  # still limp: not stiffened
 
-        try:
-            run(scenario)
-        finally:
-            try:
-                os.remove("sequences/base_only.json")
-                os.rmdir("sequences")
-            except OSError:
-                pass
+        away(scenario)
 
     def test_limp_mid_sequence_works_with_a_controller_that_does_not_answer(self):
         async def scenario(port, world, robot):
@@ -605,14 +613,7 @@ class Driving(Tidy):
             )
             self.assertTrue(await until(lambda: at(world, robot, "elbow", -30), 500))
 
-        try:
-            run(scenario)
-        finally:
-            try:
-                os.remove("sequences/wave_1.json")
-                os.rmdir("sequences")
-            except OSError:
-                pass
+        away(scenario)
 
 
 def busservo_web_armed(robot):
