@@ -36,8 +36,9 @@ cd "$(dirname "$0")/.."
 # module does is the same from either. What the .mpy changes is how a module is loaded: no
 # compile on the board, the .mpy's own format, a __file__ that ends in .mpy, and what is looked
 # for beside it (the web panel's page). So this pass runs, for each module in lib/, one test
-# module that imports it and looks at those: test_commands (busservo, and that its __file__ is
-# the .mpy), test_sim (busservo_sim), test_async (busservo_async), test_motion
+# module that imports it and looks at those: test_commands (busservo, that its __file__ is the
+# .mpy, and that a traceback from inside it names the line), test_sim (busservo_sim, and
+# busservo_board's fall-back to it), test_async (busservo_async), test_motion
 # (busservo_motion) and test_web (busservo_web, and the page it serves, found beside the .mpy).
 # The rest would run the same code again. --mpy-all runs every module against the .mpy too.
 MPY="test_commands test_sim test_async test_motion test_web"

@@ -1,6 +1,8 @@
 # What the driver writes, byte for byte against the worked examples of
 # section I of the protocol document (see docs/protocol.md), and what it refuses to write.
+import io
 import os
+import sys
 import unittest
 
 import busservo
@@ -151,6 +153,21 @@ class ModuleUnderTest(unittest.TestCase):
         lib = os.getenv("BUSSERVO_LIB") or "lib"
         kind = "py" if lib == "lib" else "mpy"
         self.assertEqual(busservo.__file__, "%s/busservo.%s" % (lib, kind))
+
+    def test_a_traceback_from_inside_the_driver_names_its_line(self):
+        # In the .mpy pass busservo is the .mpy that `sh boards/unix.sh --mpy` makes: with
+        # mpy-cross's default optimisation it keeps its line numbers (-O3 dropped them).
+        try:
+            busservo.BusServo(FakeUART()).move(300, 500, 0)
+        except ValueError as e:
+            out = io.StringIO()
+            sys.print_exception(e, out)
+            text = out.getvalue()
+        with open("lib/busservo.py") as f:  # the line that raised, in the source
+            lines = f.read().split("\n")
+        line = [i + 1 for i, s in enumerate(lines) if "must be an int in" in s]
+        self.assertIn('busservo.py", line %d, in _check' % line[0], text)
+        self.assertIn("servo_id must be an int in 0..255, got 300", text)
 
 
 # (method, arguments, exception, words the message must contain)

@@ -13,29 +13,6 @@ def version_of_package_json():
         return json.load(f)["version"]
 
 
-class Mpy(unittest.TestCase):
-    def test_a_traceback_from_inside_the_driver_names_its_line(self):
-        # In the .mpy pass busservo is the .mpy that `sh boards/unix.sh --mpy` makes: with
-        # mpy-cross's default optimisation it keeps its line numbers (-O3 dropped them).
-        import io
-        import sys
-
-        import busservo
-        from fakeuart import FakeUART
-
-        try:
-            busservo.BusServo(FakeUART()).move(300, 500, 0)
-        except ValueError as e:
-            out = io.StringIO()
-            sys.print_exception(e, out)
-            text = out.getvalue()
-        with open("lib/busservo.py") as f:  # the line that raised, in the source
-            lines = f.read().split("\n")
-        line = [i + 1 for i, s in enumerate(lines) if "must be an int in" in s]
-        self.assertIn('busservo.py", line %d, in _check' % line[0], text)
-        self.assertIn("servo_id must be an int in 0..255, got 300", text)
-
-
 class Mip(unittest.TestCase):
     def test_mip_installs_the_driver_from_package_json(self):
         log = scratch("http") + ".log"

@@ -355,6 +355,16 @@ class UartForms(unittest.TestCase):
             self.assertIsNone(uart.readinto(buf, 100))
 
 
+class Board(unittest.TestCase):
+    def test_busservo_board_falls_back_to_the_simulator_without_a_board_py(self):
+        import busservo_board
+
+        bus = busservo_board.bus()  # no board.py on the tests' path
+        self.assertTrue(busservo_board.simulated)
+        self.assertIsInstance(bus, busservo.BusServo)
+        self.assertEqual(bus.read_battery(), 7500)
+
+
 class Line(unittest.TestCase):
     # By default the simulator is at the far end of a 9600-baud line: 10 bits, 1.04 ms
     # a byte, each way. A reply comes no sooner than over a real wire.
