@@ -30,12 +30,16 @@ class ReplayUART:
     """Hands out one frame again and again: the rest of it to readinto(), as
     much as it asks for, and a byte to each read(1) (which allocates, as
     UART.read() does). Its write() takes every byte, as a UART with room in its
-    transmit buffer does. Its own readinto() and write() allocate nothing."""
+    transmit buffer does. Its own readinto() and write() allocate nothing, and
+    copy as a port's does (in C): pieces of the frame the size of the buffer
+    asked to fill are made once, and copied in with one slice assignment."""
 
     def __init__(self, frame=b""):
         self.frame = frame
         self.size = len(frame)
         self.at = 0
+        self.pieces = None  # [piece] of the frame, each as long as the reader's buffer
+        self.piece_size = 0
 
     def any(self):
         return self.size - self.at
@@ -46,12 +50,22 @@ class ReplayUART:
             n = nbytes
         if len(buf) < n:
             n = len(buf)
-        frame = self.frame
+        if len(buf) != self.piece_size:  # the first read: cut the frame to the buffer
+            self.cut(len(buf))
         at = self.at
-        for i in range(n):
-            buf[i] = frame[at + i]
+        piece = self.pieces[at // self.piece_size]
+        if at % self.piece_size == 0 and n == len(piece):
+            buf[0:n] = piece  # the usual case: what any() said, a buffer at a time
+        else:
+            for i in range(n):
+                buf[i] = self.frame[at + i]
         self.at = (at + n) % self.size
         return n
+
+    def cut(self, size):
+        # Not in readinto(): a comprehension there would make a cell of `size` on every call.
+        self.piece_size = size
+        self.pieces = [self.frame[i : i + size] for i in range(0, self.size, size)]
 
     def read(self, nbytes=1):
         at = self.at
