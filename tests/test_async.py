@@ -155,8 +155,7 @@ class Async(unittest.TestCase):
 
     def test_events_yield_every_frame_none_lost(self):
         self.uart.reply(GET_BATTERY, BATTERY_7500, delay_ms=20)  # in about 31 ms
-        self.uart.feed_later(RUN_8_ONCE, 5)  # during the query
-        self.uart.feed_later(COMPLETE_8_ONCE, 60)  # after it
+        self.uart.feed_later(RUN_8_ONCE, 5)  # during the query, before its reply
 
         async def listen(got):
             async for cmd in self.bus.events():
@@ -168,6 +167,7 @@ class Async(unittest.TestCase):
             got = []
             listener = asyncio.create_task(listen(got))
             volts = await self.bus.read_battery()  # its reply is the query's, not an event
+            self.uart.feed(COMPLETE_8_ONCE)  # after the query, however long it took
             await self.bus.wait_group_done(timeout_ms=2000)
             self.bus.request_battery()  # this reply is an event
             self.uart.feed(BATTERY_7400)
