@@ -167,7 +167,7 @@ class Async(unittest.TestCase):
             got = []
             listener = asyncio.create_task(listen(got))
             volts = await self.bus.read_battery()  # its reply is the query's, not an event
-            self.uart.feed(COMPLETE_8_ONCE)  # after the query, however long it took
+            self.uart.feed_later(COMPLETE_8_ONCE, 30)  # after the query, however long it took
             await self.bus.wait_group_done(timeout_ms=2000)
             self.bus.request_battery()  # this reply is an event
             self.uart.feed(BATTERY_7400)
