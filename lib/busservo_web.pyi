@@ -1,6 +1,6 @@
 """busservo_web: a control panel for a busservo_motion.Robot, served by the board itself to a
-browser on the same Wi-Fi (or on the board's own access point), on asyncio and Microdot. An
-optional module: it needs busservo, busservo_motion, Microdot, and its page
+browser on the same Wi-Fi (or on the board's own access point), on asyncio, with a small HTTP
+server of its own. An optional module: it needs busservo, busservo_motion, and its page
 busservo_web.html.gz beside it (the README's mip command brings them all).
 
     import asyncio, busservo_web
@@ -23,11 +23,10 @@ from busservo_motion import Player, Robot, Sequence
 
 async def serve(robot: Robot, password: str, port: int = 80) -> None:
     """Serve the panel for robot on port, on every interface, until cancelled. password: a
-    str of 8 or more characters, which the page asks for (ValueError otherwise). Sets
-    Microdot's Request.max_content_length and max_body_length to 1024 bytes."""
+    str of 8 or more characters, which the page asks for (ValueError otherwise)."""
 
 class Panel:
-    """The panel's state and its loop; serve() makes one. Its app is the Microdot app."""
+    """The panel's state, its loop and its HTTP side; serve() makes one."""
 
     robot: Robot
     bus: BusServo
@@ -40,7 +39,6 @@ class Panel:
     """The last error of the panel's loop, shown on the page."""
     limp: bool
     """The joints were let go (limp or stop) and not moved since."""
-    app: Any
     def __init__(self, robot: Robot, password: str) -> None: ...
     def disarm(self, halt: bool = True) -> None:
         """Stop driving: the stream ends (the joints hold) and the sequence stops (see
@@ -53,6 +51,9 @@ class Panel:
     def state(self, token: str | None = None) -> dict[str, Any]:
         """What GET /api/state answers: positions in degrees, battery, armed (and "mine":
         armed by token's page), the sequence."""
+    async def handle_request(self, reader: Any, writer: Any) -> None:
+        """Answer one connection's request (HTTP/1.0), then close it: serve()'s server calls
+        this for each connection."""
     async def run(self) -> None:
         """The panel's loop, for ever: the bus's replies, the stream, the player, the
         dead-man, and position and battery requests."""

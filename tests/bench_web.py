@@ -9,7 +9,7 @@
 #
 # - page: lib/busservo_web.html.gz as served (goal: 12 KB at most).
 # - RAM, measured on the unix port with gc.mem_alloc() after gc.collect(): what importing
-#   busservo_web (and Microdot) adds to a process that has busservo and busservo_motion, and
+#   busservo_web adds to a process that has busservo and busservo_motion, and
 #   what serving adds on top while one client is connected (its request half sent). The unix
 #   port is 64-bit: a 32-bit board's objects take about 40 % less.
 # - latency: from the moment the page's target request starts (before it connects) to when
@@ -143,7 +143,7 @@ def main(quick=False):
     print("| figure | value | goal |")
     print("| --- | --- | --- |")
     print("| page, gzipped (raw) | %d bytes (%d) | 12288 bytes at most |" % (gz, raw))
-    print("| RAM: import busservo_web and Microdot | %d bytes | (unix port, 64-bit) |" % imported)
+    print("| RAM: import busservo_web | %d bytes | (unix port, 64-bit) |" % imported)
     print("| RAM: serving, one client connected | %d bytes more | (unix port, 64-bit) |" % serving)
     for joints in (1, 4):
         ms = latency(joints, samples)

@@ -14,7 +14,7 @@ class Harness(unittest.TestCase):
         page = rows["page, gzipped (raw)"].split("|")[2].split()
         self.assertTrue(int(page[0]) <= 12288, out)
         for name in (
-            "RAM: import busservo_web and Microdot",
+            "RAM: import busservo_web",
             "RAM: serving, one client connected",
         ):
             self.assertTrue(int(rows[name].split("|")[2].split()[0]) > 0, out)

@@ -717,8 +717,8 @@ class AlwaysAnswers(Tidy):
         page = b"GET / HTTP/1.0\r\n\r\n"
 
         async def scenario(port, world, robot):
-            app = _panels[-1].app
-            serve = app.handle_request
+            panel = _panels[-1]
+            serve = panel.handle_request
             # (what fails, at which of the connection's reads or writes, what the client gets)
             for error, reads, writes, want in (
                 (MemoryError, 1, 0, b"HTTP/1.0 503 "),  # reading the request
@@ -727,7 +727,7 @@ class AlwaysAnswers(Tidy):
                 (MemoryError, 0, 8, b"HTTP/1.0 200 OK\r\n"),  # the page half sent
             ):
                 case = (error, reads, writes)
-                app.handle_request = failing(serve, error, reads, writes)
+                panel.handle_request = failing(serve, error, reads, writes)
                 reader, writer = await asyncio.open_connection("127.0.0.1", port)
                 await writer.awrite(page)
                 reply, end = b"", "closed"
@@ -743,7 +743,7 @@ class AlwaysAnswers(Tidy):
                     pass
                 await writer.aclose()
                 self.assertEqual((reply[: len(want)], end), (want, "closed"), (case, reply))
-                app.handle_request = serve
+                panel.handle_request = serve
                 status, _ = await http(port, "GET", "/")
                 self.assertEqual(status, 200, case)
 
@@ -751,7 +751,7 @@ class AlwaysAnswers(Tidy):
 
 
 def failing(serve, error, reads, writes):
-    """serve (an app's handle_request) with a connection whose reads-th read, or writes-th
+    """serve (a panel's handle_request) with a connection whose reads-th read, or writes-th
     write, raises error."""
 
     def handle_request(reader, writer):
