@@ -33,6 +33,10 @@
 # Plain HTTP: anyone who can watch the Wi-Fi can read the password. Use a
 # network you trust, or the board's own access point with a WPA2 key.
 #
+# The loop never waits on the wire: the positions a route needs (arm, capture, add,
+# a stop's halt) are read with the driver's ask(), a step every few ms, so the
+# stream, the dead-man and the other pages go on while the reply is on its way.
+#
 # What the page asks for (JSON in and out; errors are {"error": "..."}):
 #   POST /api/login {"password"}   -> {"token"}
 #   GET  /api/joints               -> [{"name", "lo", "hi"}, ...]
@@ -60,6 +64,7 @@ _OPEN_MS = 3000  # a page asked within this: read positions often
 _READ_MS = 150  # positions asked this often while a page is open
 _BATTERY_MS = 2000
 _TICK_MS = 10  # the panel's loop: poll the bus, step the stream and the player
+_ASK_MS = 5  # a query's next step: a byte takes 1 ms at 9600 baud
 _FOLDER = "sequences"
 _NAME_MAX = 24
 _MS_DEFAULT = 1000  # time to reach an added pose, if the page gives none
@@ -269,6 +274,17 @@ async def _page(conn, head):
             await conn.write(view[:n])
 
 
+class _Known:
+    # Stands in for the bus inside robot.where(), which reads with read_positions():
+    # the positions the panel has just read with ask(), so that where() need not ask
+    # again (and block). busservo_motion has no query that does not block.
+    def __init__(self, positions):
+        self.positions = positions
+
+    def read_positions(self, ids, timeout_ms=None):
+        return {i: self.positions[i] for i in ids}
+
+
 async def _close(writer):
     try:
         await writer.aclose()
@@ -293,6 +309,9 @@ class Panel:
         self.player = None
         self.error = None  # the last error of the loop, for the page
         self.limp = False  # joints let go by limp() or estop(), until the next move
+        self._orders = 0  # bumped by each order: a halt or an arm begun before one is void
+        self._halting = None  # the task that halts a sequence stopped mid-pose
+        self._asking = asyncio.Lock()  # one query of the panel's on the bus at a time
         now = time.ticks_ms()
         self._seen = time.ticks_add(now, -_OPEN_MS)  # any page, last
         self._read = self._battery = now
@@ -327,6 +346,24 @@ class Panel:
             found[1] = self._seen = time.ticks_ms()
         return found
 
+    # Reading positions without waiting on the wire.
+
+    async def where(self, names=None):
+        """{name: degrees} of these joints (all by default), as Robot.where() gives them,
+        read now without blocking: the query is the driver's ask(), a step every few ms,
+        while the loop, the stream and the other pages go on."""
+        robot = self.robot
+        names = robot.names if names is None else names
+        ids = [robot.joints[name].servo_id for name in names]
+        async with self._asking:
+            for _ in self.bus.ask(ids):
+                await asyncio.sleep_ms(_ASK_MS)
+            robot.bus = _Known(self.bus.positions)
+            try:
+                return robot.where(names)
+            finally:
+                robot.bus = self.bus
+
     # What the page can do.
 
     def disarm(self, halt=True):
@@ -336,9 +373,10 @@ class Panel:
         self.stop(halt)
 
     def stop(self, halt=True):
-        """Stop the sequence; with halt, its pose on the way too (which would go
-        on for its ms): the joints it moves are sent where they are now (a read
-        of their positions first, ~30 ms)."""
+        """Stop the sequence; with halt, its pose on the way too (which would go on for
+        its ms): the joints it moves are sent where they are, once a read of their
+        positions has come (about 30 ms; the loop goes on meanwhile)."""
+        self._orders += 1
         player = self.player
         self.player = None
         if player and not player.done:
@@ -347,7 +385,15 @@ class Panel:
                 names = set()
                 for pose, _ in self.sequence.steps:
                     names.update(pose)
-                self.robot.move(self.robot.where(list(names)), ms=_HALT_MS)
+                self._halting = asyncio.create_task(self._halt(list(names), self._orders))
+
+    async def _halt(self, names, orders):
+        try:
+            pose = await self.where(names)
+            if self._orders == orders:  # nothing else ordered since: no stream, no limp
+                self.robot.move(pose, ms=_HALT_MS)
+        except Exception as e:  # the controller did not answer: the pose is reached
+            self.error = "%s: %s" % (type(e).__name__, e)
 
     def estop(self):
         self.disarm(halt=False)  # at once: the joints go limp
@@ -368,6 +414,7 @@ class Panel:
             if joint is None:
                 raise _Refused(400, "no joint %r: the joints are %s" % (name, self.robot.names))
             _need(targets, name, float, joint.lo, joint.hi, "targets[%r]" % name)
+        self._orders += 1
         self.robot.stream(targets)
         self.limp = False
 
@@ -427,8 +474,8 @@ class Panel:
                 self.player = None
             else:
                 self.player.step()
-        if bus.wire_ms():
-            return  # the stream and the player come first
+        if bus.wire_ms() or self._asking.locked():
+            return  # the stream, the player and a route's query come first
         open_ = time.ticks_diff(now, self._seen) < _OPEN_MS
         if time.ticks_diff(now, self._read) >= (_READ_MS if open_ else _OPEN_MS):
             self._read = now
@@ -569,8 +616,11 @@ class Panel:
         if _need(body, "on", bool):
             if self.armed not in (None, token):
                 raise _Refused(409, "another page has the panel armed")
+            orders = self._orders
             self.robot.hold()  # arming moves nothing: targets come from the page
-            self.robot.where()  # where the joints are (a joint with a dps limit needs it)
+            await self.where()  # where the joints are (a joint with a dps limit needs it)
+            if self._orders != orders or self.armed not in (None, token):
+                raise _Refused(409, "stopped, or armed elsewhere, while arming: arm again")
             self.armed = token
         elif self.armed == token:
             self.disarm()
@@ -591,11 +641,11 @@ class Panel:
         return self.state(token)
 
     async def _post_capture(self, body, token):
-        return {"pose": self.robot.capture()}
+        return {"pose": await self.where()}
 
     async def _post_add(self, body, token):
         ms = _MS_DEFAULT if body.get("ms") is None else _need(body, "ms", int, 0, 65535)
-        self.sequence.append(self.robot.capture(), ms)
+        self.sequence.append(await self.where(), ms)
         return self.state(token)
 
     async def _post_remove(self, body, token):
@@ -616,6 +666,7 @@ class Panel:
         self._driver(token)
         if not self.sequence.steps:
             raise _Refused(409, "the sequence is empty: add poses first")
+        self._orders += 1
         self.robot.hold()
         self.player = self.sequence.play(self.robot, speed, bool(body.get("loop")))
         self.limp = False
@@ -686,3 +737,5 @@ async def serve(robot, password, port=80):
         if server:
             server.close()
         panel.disarm()
+        if panel._halting:
+            await panel._halting  # a sequence stopped mid-pose: where the joints are

@@ -45,7 +45,13 @@ class Panel:
         stop(): with halt, its pose on the way too)."""
     def stop(self, halt: bool = True) -> None:
         """Stop the sequence; with halt, its pose on the way too: the joints it moves are
-        sent where they are now (a blocking read of their positions first, about 30 ms)."""
+        sent where they are, once a read of their positions has come (about 30 ms later; the
+        read does not block: see where()), unless something else was ordered meanwhile."""
+    async def where(self, names: list[str] | None = None) -> dict[str, float]:
+        """{name: degrees} of these joints (all by default), as Robot.where() gives them, read
+        now without blocking: the query is the driver's BusServo.ask(), a step every 5 ms, so
+        the panel's loop, the stream and the other pages go on while the reply is on its
+        way. One such query at a time; raises OSError(ETIMEDOUT) as Robot.where() does."""
     def estop(self) -> None:
         """Disarm and stop the sequence at once, then Robot.estop(): every joint limp."""
     def state(self, token: str | None = None) -> dict[str, Any]:

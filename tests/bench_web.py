@@ -1,8 +1,8 @@
-# The web panel's figures: its page's size, the RAM it adds, and the latency from a slider
-# event to its frame leaving the wire. The panel serves the robot of tests/web_world.py (the
-# simulated controller behind an rp2's UART and a 9600-baud line, on real time), and a client
-# in the same process plays the page: it polls /api/state 5 times a second, as an open page
-# does, and sends slider targets.
+# The web panel's figures: its page's size, the RAM it adds, the latency from a slider
+# event to its frame leaving the wire, and how long the loop ever stands still. The panel
+# serves the robot of tests/web_world.py (the simulated controller behind an rp2's UART and
+# a 9600-baud line, on real time), and a client in the same process plays the page: it polls
+# /api/state 5 times a second, as an open page does, and sends slider targets.
 #
 #   sh boards/unix.sh tests/bench_web.py          # prints a Markdown table
 #   sh boards/unix.sh tests/bench_web.py quick    # fewer samples (tests/test_bench_web.py)
@@ -15,6 +15,12 @@
 # - latency: from the moment the page's target request starts (before it connects) to when
 #   the controller had the last byte of the frame that carries it (the world's arrivals),
 #   for a drag of one joint and of all four. Goal: one frame's wire time plus 50 ms.
+# - stall: while one page captures poses and adds them (each a positions query) and another,
+#   armed, streams a slider, the longest the event loop stood still (a task that sleeps 1 ms
+#   and notes the gap beyond it), and the longest gap between two of the panel's ticks (due
+#   every 10 ms). A query that blocked would stall both for its round trip (30 ms and more);
+#   the goal is a frame's decode. The client runs in the same process: its own work is in
+#   the figure too.
 import asyncio
 import gc
 import os
@@ -131,6 +137,82 @@ def latency(joints, samples):
     return found
 
 
+def stall(seconds):
+    """(the event loop's longest stall, the panel loop's longest gap between two ticks, how
+    many poses were captured), in ms, while one page captures poses and adds them to the
+    sequence, and another, armed, streams a slider and polls the state as an open page
+    does. A blocking query stalls both for its round trip."""
+    import busservo_web
+
+    world = web_world.live()
+    robot = web_world.robot(world)
+    port = PORT + 10
+    worst = [0, 0, 0]  # us: the event loop's, the panel's ticks'; captures
+    tick = busservo_web.Panel._tick
+    last_tick = [None]
+
+    def timed_tick(panel):
+        now = time.ticks_us()
+        if last_tick[0] is not None:
+            worst[1] = max(worst[1], time.ticks_diff(now, last_tick[0]))
+        last_tick[0] = now
+        tick(panel)
+
+    async def probe(stop):
+        last = time.ticks_us()
+        while not stop:
+            await asyncio.sleep_ms(1)
+            now = time.ticks_us()
+            worst[0] = max(worst[0], time.ticks_diff(now, last) - 1000)
+            last = now
+
+    async def capturer(token, stop):
+        http = web_world.http
+        while not stop:
+            status, reply = await http(port, "POST", "/api/capture", {}, token)
+            status, reply = await http(port, "POST", "/api/add", {"ms": 500}, token)
+            worst[2] += status == 200
+
+    async def streamer(token, stop):
+        http = web_world.http
+        await http(port, "POST", "/api/arm", {"on": True}, token)
+        k = 0
+        while not stop:
+            k += 1
+            degrees = k % 60 - 30
+            await http(port, "POST", "/api/target", {"targets": {"base": degrees}}, token)
+            if k % 6 == 0:
+                await http(port, "GET", "/api/state", token=token)
+            await asyncio.sleep_ms(30)
+
+    async def main():
+        server = asyncio.create_task(busservo_web.serve(robot, PASSWORD, port))
+        await asyncio.sleep_ms(100)
+        first = await web_world.login(port, PASSWORD)
+        second = await web_world.login(port, PASSWORD)
+        stop = []
+        tasks = [streamer(second, stop), capturer(first, stop)]
+        tasks = [asyncio.create_task(t) for t in tasks]
+        await asyncio.sleep_ms(200)  # armed and streaming
+        last_tick[0] = None
+        worst[0] = worst[1] = worst[2] = 0
+        watch = asyncio.create_task(probe(stop))
+        await asyncio.sleep_ms(seconds * 1000)
+        stop.append(1)
+        for task in tasks + [watch]:
+            await task
+        server.cancel()
+        await asyncio.sleep_ms(20)
+
+    busservo_web.Panel._tick = timed_tick
+    try:
+        asyncio.run(main())
+    finally:
+        busservo_web.Panel._tick = tick
+        busservo.time = bm.time = time
+    return worst[0] / 1000, worst[1] / 1000, worst[2]
+
+
 def carries(frame, want):
     got = {frame[i]: frame[i + 1] | frame[i + 2] << 8 for i in range(7, len(frame), 3)}
     return all(got.get(k) == v for k, v in want.items())
@@ -162,6 +244,12 @@ def main(quick=False):
                 frame_ms(joints),
             )
         )
+    loop, ticks, captured = stall(1 if quick else 5)
+    print(
+        "| longest stall, a page capturing poses (%d), another streaming a slider |"
+        " the event loop %.1f ms, the panel's ticks %.1f ms apart |"
+        " a frame's decode (the ticks: %d ms apart) |" % (captured, loop, ticks, 10)
+    )
 
 
 main("quick" in sys.argv[1:])

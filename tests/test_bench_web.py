@@ -20,3 +20,6 @@ class Harness(unittest.TestCase):
             self.assertTrue(int(rows[name].split("|")[2].split()[0]) > 0, out)
         for joints in ("1 joint", "4 joints"):
             self.assertIn(", 0 lost", rows["latency, slider to wire, " + joints], out)
+        stall = [row for name, row in rows.items() if name.startswith("longest stall")]
+        self.assertEqual(len(stall), 1, out)
+        self.assertIn("the event loop ", stall[0], out)

@@ -645,6 +645,73 @@ class Driving(Tidy):
                 pass
 
 
+class NeverWaits(Tidy):
+    # The panel never waits on the wire: the positions it reads for a route (arm, capture,
+    # add, a stop's halt) come through the driver's ask(), a step at a time, so the loop,
+    # the stream, the dead-man and the other pages go on while the reply is on its way.
+    def test_no_route_calls_a_blocking_query(self):
+        async def scenario(port, world, robot):
+            blocking = []
+
+            def query(*args):
+                blocking.append(args)
+                raise AssertionError("a blocking query")
+
+            robot.bus.read_positions = robot.bus.read_battery = query
+            token = await login(port)
+            status, reply = await http(port, "POST", "/api/arm", {"on": True}, token)
+            self.assertEqual(status, 200, reply)
+            status, reply = await http(port, "POST", "/api/capture", {}, token)
+            self.assertEqual((status, sorted(reply["pose"])), (200, sorted(robot.names)), reply)
+            for degrees in (-40, 40):
+                await http(port, "POST", "/api/target", {"targets": {"base": degrees}}, token)
+                self.assertTrue(await until(lambda d=degrees: at(world, robot, "base", d)))
+                status, reply = await http(port, "POST", "/api/add", {"ms": 20000}, token)
+                self.assertEqual(status, 200, reply)
+            await http(port, "POST", "/api/play", {}, token)
+            await asyncio.sleep_ms(400)  # on its way to 40 degrees, for 20 s
+            status, reply = await http(port, "POST", "/api/stop", {}, token)
+            self.assertEqual(status, 200, reply)
+            self.assertTrue(await until(lambda: moves(world)[-1][5] == 100))  # the halt, 100 ms
+            self.assertEqual(blocking, [])
+
+        run(scenario)
+
+    def test_a_page_is_answered_while_another_waits_for_the_controller(self):
+        async def scenario(port, world, robot):
+            token = await login(port)
+            world.sim.silent = True  # the capture's query waits out its whole timeout
+            answered = []
+
+            async def ask(method, path, body=None):
+                status, _ = await http(port, method, path, body, token)
+                answered.append((path, status))
+
+            capture = asyncio.create_task(ask("POST", "/api/capture", {}))
+            await asyncio.sleep_ms(30)  # its request is in, its query on the wire
+            await ask("GET", "/api/state")
+            await capture
+            self.assertEqual(answered, [("/api/state", 200), ("/api/capture", 504)])
+
+        run(scenario)
+
+    def test_a_stop_after_a_halt_began_is_not_undone_by_it(self):
+        # The halt sends the joints where its read found them, unless something else was
+        # ordered while the read was on its way: STOP's limp joints stay limp.
+        async def scenario(port, world, robot):
+            token = await armed(port)
+            await http(port, "POST", "/api/add", {"ms": 20000}, token)
+            await http(port, "POST", "/api/play", {}, token)
+            await asyncio.sleep_ms(200)
+            stop = asyncio.create_task(http(port, "POST", "/api/stop", {}, token))
+            estop = asyncio.create_task(http(port, "POST", "/api/estop", {}, token))
+            self.assertEqual([(await stop)[0], (await estop)[0]], [200, 200])
+            await asyncio.sleep_ms(300)  # a halt's read would have come, and its move gone
+            self.assertEqual(world.sim.limp, {1, 2, 3, 4})
+
+        run(scenario)
+
+
 def busservo_web_armed(robot):
     return _panels[-1].armed is not None if _panels else None
 
