@@ -298,7 +298,11 @@ class Panel:
 
     def __init__(self, robot, password):
         if type(password) is not str or len(password) < 8:
-            raise ValueError("password must be a str of 8 or more characters, got %r" % password)
+            # Why, never the password itself: the message may end up in a log or on a screen.
+            got = type(password).__name__
+            if got == "str":
+                got = "%d characters" % len(password)
+            raise ValueError("password must be a str of 8 or more characters, got " + got)
         self.robot = robot
         self.bus = robot.bus
         self._ids = [robot.joints[name].servo_id for name in robot.names]
