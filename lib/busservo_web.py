@@ -41,9 +41,12 @@
 #   POST /api/login {"password"}   -> {"token"}
 #   GET  /api/joints               -> [{"name", "lo", "hi"}, ...]
 #   GET  /api/state                -> positions in degrees, battery, armed, sequence, ...
+#   GET  /api/steps                -> the sequence: [{"pose": {name: degrees}, "ms"}, ...]
 #   POST /api/arm {"on"}, /api/target {"targets": {name: degrees}}, /api/estop,
-#        /api/limp, /api/capture, /api/add {"ms"}, /api/remove {"index"}, /api/clear,
+#        /api/limp, /api/capture -> {"pose"}, /api/add {"pose", "ms"} (no pose: read now),
+#        /api/edit {"index", "pose", "ms"}, /api/remove {"index"}, /api/clear,
 #        /api/play {"speed", "loop"}, /api/stop, /api/save {"name"}, /api/load {"name"}
+# and GET /favicon.ico -> 204, without a login (a browser asks for it before one).
 #   GET  /api/sequences            -> ["name", ...]
 import asyncio
 import json
@@ -65,9 +68,10 @@ _READ_MS = 150  # positions asked this often while a page is open
 _BATTERY_MS = 2000
 _TICK_MS = 10  # the panel's loop: poll the bus, step the stream and the player
 _ASK_MS = 5  # a query's next step: a byte takes 1 ms at 9600 baud
+_ERROR_MS = 3000  # the loop's last error is shown until this long after it last happened
 _FOLDER = "sequences"
 _NAME_MAX = 24
-_MS_DEFAULT = 1000  # time to reach an added pose, if the page gives none
+_MS_DEFAULT = 1000  # time to reach an added pose, if the request gives none
 _HALT_MS = 100  # a sequence stopped mid-pose: the joints go where they are, in this
 _NAME_CHARS = "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_"
 
@@ -124,6 +128,7 @@ def _need(body, key, kind, low=None, high=None, what=None):
 # The status lines the panel answers with.
 _STATUS = {
     200: b"200 OK",
+    204: b"204 No Content",
     400: b"400 Bad Request",
     401: b"401 Unauthorized",
     404: b"404 Not Found",
@@ -148,6 +153,7 @@ _FAILED = (
     b"HTTP/1.0 503 Service Unavailable\r\nContent-Type: application/json\r\nContent-Length: 67"
     b'\r\n\r\n{"error": "the panel could not answer (out of memory?): try again"}'
 )
+_EMPTY = b"HTTP/1.0 204 No Content\r\n\r\n"
 
 
 def _name(body):
@@ -244,7 +250,10 @@ async def _request(conn):
 
 
 async def _answer(conn, status, answer):
-    # A JSON answer.
+    # A JSON answer (None: no body, 204).
+    if answer is None:
+        await conn.write(_EMPTY)
+        return
     data = json.dumps(answer)
     await conn.write(
         b"HTTP/1.0 %s\r\nContent-Type: application/json\r\nContent-Length: %d\r\n\r\n"
@@ -310,8 +319,10 @@ class Panel:
         self._sessions = []  # [token, ticks_ms last seen], oldest first
         self.armed = None  # the token of the page that armed, or None
         self.sequence = bm.Sequence()
+        self.edits = 0  # changes to the sequence: the page reads it again when this grows
         self.player = None
         self.error = None  # the last error of the loop, for the page
+        self._error_at = 0
         self.limp = False  # joints let go by limp() or estop(), until the next move
         self._orders = 0  # bumped by each order: a halt or an arm begun before one is void
         self._halting = None  # the task that halts a sequence stopped mid-pose
@@ -397,30 +408,31 @@ class Panel:
             if self._orders == orders:  # nothing else ordered since: no stream, no limp
                 self.robot.move(pose, ms=_HALT_MS)
         except Exception as e:  # the controller did not answer: the pose is reached
-            self.error = "%s: %s" % (type(e).__name__, e)
+            self._failed(e)
 
     def estop(self):
         self.disarm(halt=False)  # at once: the joints go limp
         self.limp = True
         self.robot.estop()
 
+    def _failed(self, e):
+        self.error = "%s: %s" % (type(e).__name__, e)
+        self._error_at = time.ticks_ms()
+
     def _driver(self, token):
         if self.armed != token:
             raise _Refused(409, "arm the panel first (another page may have it armed)")
 
-    def _target(self, token, targets):
-        self._driver(token)
-        self._not_playing()
-        if type(targets) is not dict or not targets:
-            raise _Refused(400, "targets must be {joint: degrees}, got %r" % (targets,))
-        for name in targets:
+    def _pose(self, pose, what):
+        # A pose {joint: degrees}, checked: known joints, within their limits.
+        if type(pose) is not dict or not pose:
+            raise _Refused(400, "%s must be {joint: degrees}, got %r" % (what, pose))
+        for name in pose:
             joint = self.robot.joints.get(name)
             if joint is None:
                 raise _Refused(400, "no joint %r: the joints are %s" % (name, self.robot.names))
-            _need(targets, name, float, joint.lo, joint.hi, "targets[%r]" % name)
-        self._orders += 1
-        self.robot.stream(targets)
-        self.limp = False
+            _need(pose, name, float, joint.lo, joint.hi, "%s[%r]" % (what, name))
+        return pose
 
     def _not_playing(self):
         if self.player:
@@ -436,6 +448,8 @@ class Panel:
             p = positions.get(joint.servo_id)
             at.append(None if p is None else round(joint.degrees(p), 1))
         player = self.player
+        if self.error and time.ticks_diff(time.ticks_ms(), self._error_at) > _ERROR_MS:
+            self.error = None  # over: it has not happened again for a while
         return {
             "at": at,
             "battery": self.bus.battery,
@@ -443,6 +457,7 @@ class Panel:
             "mine": token is not None and self.armed == token,
             "limp": self.limp,
             "steps": [ms for _, ms in self.sequence.steps],
+            "edits": self.edits,
             "playing": player.index if player else None,
             "updates": robot.updates,
             "error": self.error,
@@ -456,7 +471,7 @@ class Panel:
             try:
                 self._tick()
             except Exception as e:  # the panel must go on, and say so
-                self.error = "%s: %s" % (type(e).__name__, e)
+                self._failed(e)
                 try:
                     self.stop()
                 except Exception:
@@ -565,6 +580,9 @@ class Panel:
             if path == "/" and method in ("GET", "HEAD"):
                 await _page(conn, method == "HEAD")
                 return
+            if path == "/favicon.ico" and method == "GET":
+                await _answer(conn, 204, None)  # no icon: nothing to log in for
+                return
             name = path[5:] if path.startswith("/api/") else ""
             if name == "login" and method == "POST":
                 answer = await self._post_login(body)
@@ -616,6 +634,9 @@ class Panel:
     async def _get_state(self, body, token):
         return self.state(token)
 
+    async def _get_steps(self, body, token):
+        return [{"pose": pose, "ms": ms} for pose, ms in self.sequence.steps]
+
     async def _post_arm(self, body, token):
         if _need(body, "on", bool):
             if self.armed not in (None, token):
@@ -631,7 +652,12 @@ class Panel:
         return self.state(token)
 
     async def _post_target(self, body, token):
-        self._target(token, body.get("targets"))
+        self._driver(token)
+        self._not_playing()
+        targets = self._pose(body.get("targets"), "targets")
+        self._orders += 1
+        self.robot.stream(targets)
+        self.limp = False
         return {}
 
     async def _post_estop(self, body, token):
@@ -648,21 +674,42 @@ class Panel:
         return {"pose": await self.where()}
 
     async def _post_add(self, body, token):
+        # The pose given (the one the page showed, maybe edited), else the one read now.
         ms = _MS_DEFAULT if body.get("ms") is None else _need(body, "ms", int, 0, 65535)
-        self.sequence.append(await self.where(), ms)
+        pose = body.get("pose")
+        pose = await self.where() if pose is None else self._pose(pose, "pose")
+        self.sequence.append(pose, ms)
+        self.edits += 1
+        return self.state(token)
+
+    def _step(self, body):
+        # The index of a step of the sequence, checked; none while it plays.
+        steps = self.sequence.steps
+        if not steps:
+            raise _Refused(409, "the sequence is empty")
+        self._not_playing()
+        return _need(body, "index", int, 0, len(steps) - 1)
+
+    async def _post_edit(self, body, token):
+        i = self._step(body)
+        pose, ms = self.sequence.steps[i]
+        if body.get("pose") is not None:
+            pose = dict(self._pose(body["pose"], "pose"))
+        if body.get("ms") is not None:
+            ms = _need(body, "ms", int, 0, 65535)
+        self.sequence.steps[i] = (pose, ms)
+        self.edits += 1
         return self.state(token)
 
     async def _post_remove(self, body, token):
-        steps = self.sequence.steps
-        i = _need(body, "index", int, 0, max(0, len(steps) - 1))
-        if not steps or self.player:
-            raise _Refused(409, "nothing to remove, or a sequence is playing")
-        steps.pop(i)
+        self.sequence.steps.pop(self._step(body))
+        self.edits += 1
         return self.state(token)
 
     async def _post_clear(self, body, token):
         self._not_playing()
         self.sequence = bm.Sequence()
+        self.edits += 1
         return self.state(token)
 
     async def _post_play(self, body, token):
@@ -717,6 +764,7 @@ class Panel:
                         400, "%s moves joint %r, which this robot has not" % (path, name)
                     )
         self.sequence = sequence
+        self.edits += 1
         return self.state(token)
 
 

@@ -34,9 +34,12 @@ class Panel:
     """The session token of the page that armed the panel, or None."""
     sequence: Sequence
     """The sequence the page builds and plays."""
+    edits: int
+    """How many times the sequence has changed: a page reads it again when this grows."""
     player: Player | None
     error: str | None
-    """The last error of the panel's loop, shown on the page."""
+    """The last error of the panel's loop, shown on the page until 3 s after it last
+    happened."""
     limp: bool
     """The joints were let go (limp or stop) and not moved since."""
     def __init__(self, robot: Robot, password: str) -> None: ...
@@ -56,7 +59,7 @@ class Panel:
         """Disarm and stop the sequence at once, then Robot.estop(): every joint limp."""
     def state(self, token: str | None = None) -> dict[str, Any]:
         """What GET /api/state answers: positions in degrees, battery, armed (and "mine":
-        armed by token's page), the sequence."""
+        armed by token's page), the sequence's times and how many times it changed."""
     async def handle_request(self, reader: Any, writer: Any) -> None:
         """Answer one connection's request (HTTP/1.0), then close it: serve()'s server calls
         this for each connection."""

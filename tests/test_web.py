@@ -27,12 +27,14 @@ ROUTES = (
     ("GET", "/api/joints", None),
     ("GET", "/api/state", None),
     ("GET", "/api/sequences", None),
+    ("GET", "/api/steps", None),
     ("POST", "/api/arm", {"on": True}),
     ("POST", "/api/target", {"targets": {"base": 30}}),
     ("POST", "/api/estop", {}),
     ("POST", "/api/limp", {}),
     ("POST", "/api/capture", {}),
     ("POST", "/api/add", {"ms": 500}),
+    ("POST", "/api/edit", {"index": 0, "ms": 5}),
     ("POST", "/api/remove", {"index": 0}),
     ("POST", "/api/clear", {}),
     ("POST", "/api/play", {"speed": 1, "loop": True}),
@@ -140,6 +142,17 @@ class Page(Tidy):
             await writer.aclose()
             self.assertIn(b"X-Frame-Options: DENY", head)
             self.assertIn(b"Content-Encoding: gzip", head)
+
+        run(scenario)
+
+    def test_the_icon_every_browser_asks_for_is_answered_without_a_login(self):
+        # The page says it has no icon, but a browser may ask anyway, before the login: a
+        # 401 there is an error in its console that means nothing. 204: there is none.
+        async def scenario(port, world, robot):
+            status, reply = await http(port, "GET", "/favicon.ico")
+            self.assertEqual((status, reply), (204, b""))
+            status, reply = await http(port, "POST", "/favicon.ico")
+            self.assertEqual(status, 401)  # nothing else about it is open
 
         run(scenario)
 
@@ -651,6 +664,79 @@ class Driving(Tidy):
                 os.rmdir("sequences")
             except OSError:
                 pass
+
+
+class Teaching(Tidy):
+    # What was seen is what is added: the page adds the pose it shows (captured, maybe
+    # edited); a step can be edited or removed alone; the sequence's changes are counted,
+    # so that a page reads it again (GET /api/steps) only when it changed.
+    def test_a_pose_given_is_added_and_one_step_is_edited_or_removed_alone(self):
+        async def scenario(port, world, robot):
+            token = await login(port)
+            post = lambda path, body: http(port, "POST", path, body, token)  # noqa: E731
+            status, reply = await post("/api/add", {"pose": {"base": 10, "elbow": -20}, "ms": 300})
+            self.assertEqual((status, reply["steps"], reply["edits"]), (200, [300], 1), reply)
+            status, reply = await post("/api/add", {"ms": 400})  # no pose: where they are now
+            self.assertEqual((status, reply["steps"]), (200, [300, 400]), reply)
+            status, reply = await post("/api/add", {"pose": {"base": 30}, "ms": 500})
+            status, steps = await http(port, "GET", "/api/steps", token=token)
+            self.assertEqual(status, 200)
+            self.assertEqual(
+                steps,
+                [
+                    {"pose": {"base": 10, "elbow": -20}, "ms": 300},
+                    {"pose": {"base": 0, "shoulder": 0, "elbow": 0, "claw": 0}, "ms": 400},
+                    {"pose": {"base": 30}, "ms": 500},
+                ],
+            )
+            status, reply = await post("/api/edit", {"index": 1, "pose": {"base": -5}, "ms": 250})
+            self.assertEqual((status, reply["steps"], reply["edits"]), (200, [300, 250, 500], 4))
+            status, reply = await post("/api/edit", {"index": 2, "ms": 600})  # its pose kept
+            status, reply = await post("/api/remove", {"index": 0})
+            self.assertEqual((status, reply["steps"]), (200, [250, 600]), reply)
+            status, steps = await http(port, "GET", "/api/steps", token=token)
+            self.assertEqual(
+                steps, [{"pose": {"base": -5}, "ms": 250}, {"pose": {"base": 30}, "ms": 600}]
+            )
+            for path, body, why in (
+                ("/api/add", {"pose": {"wrist": 1}}, "no joint 'wrist'"),
+                ("/api/add", {"pose": {"claw": 61}}, "pose['claw'] must be in 0..60, got 61"),
+                ("/api/add", {"pose": {}}, "pose must be {joint: degrees}, got {}"),
+                ("/api/add", {"pose": [1]}, "pose must be {joint: degrees}, got [1]"),
+                ("/api/edit", {"index": 2, "ms": 1}, "index must be in 0..1, got 2"),
+                ("/api/edit", {"index": 0, "ms": -1}, "ms must be in 0..65535, got -1"),
+                ("/api/edit", {"index": 0, "pose": {"base": "x"}}, "must be a number"),
+                ("/api/remove", {"index": -1}, "index must be in 0..1, got -1"),
+            ):
+                status, reply = await post(path, body)
+                self.assertEqual(status, 400, (path, body, reply))
+                self.assertIn(why, reply["error"])
+            status, steps = await http(port, "GET", "/api/steps", token=token)
+            self.assertEqual(len(steps), 2)  # nothing changed by them
+            self.assertEqual(moves(world), [])  # nor moved
+
+        run(scenario)
+
+    def test_an_error_of_the_loop_is_shown_then_cleared_once_it_is_over(self):
+        async def scenario(port, world, robot):
+            token = await login(port)
+            bus = robot.bus
+            failed = []
+
+            def poll():
+                failed.append(1)
+                del bus.poll  # once: the UART is back
+                raise OSError(5)
+
+            bus.poll = poll
+            self.assertTrue(await until(lambda: failed))
+            status, reply = await http(port, "GET", "/api/state", token=token)
+            self.assertTrue(reply["error"].startswith("OSError: "), reply)
+            over = 4000  # it is shown until 3 s after it last happened (_ERROR_MS)
+            gone = await until(lambda: _panels[-1].state()["error"] is None, over)
+            self.assertTrue(gone, "the error was still shown %d ms after it was over" % over)
+
+        run(scenario)
 
 
 class NeverWaits(Tidy):
