@@ -46,8 +46,8 @@
 #        /api/limp, /api/capture -> {"pose"}, /api/add {"pose", "ms"} (no pose: read now),
 #        /api/edit {"index", "pose", "ms"}, /api/remove {"index"}, /api/clear,
 #        /api/play {"speed", "loop"}, /api/stop, /api/save {"name"}, /api/load {"name"}
-# and GET /favicon.ico -> 204, without a login (a browser asks for it before one).
 #   GET  /api/sequences            -> ["name", ...]
+# and GET /favicon.ico -> 204, without a login (a browser asks for it before one).
 import asyncio
 import json
 import os
@@ -254,12 +254,12 @@ async def _answer(conn, status, answer):
     if answer is None:
         await conn.write(_EMPTY)
         return
-    data = json.dumps(answer)
+    data = json.dumps(answer).encode()  # its length in bytes: a joint's name may be é
     await conn.write(
         b"HTTP/1.0 %s\r\nContent-Type: application/json\r\nContent-Length: %d\r\n\r\n"
         % (_STATUS[status], len(data))
     )
-    await conn.write(data.encode())
+    await conn.write(data)
 
 
 async def _page(conn, head):

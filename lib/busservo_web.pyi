@@ -6,14 +6,19 @@ busservo_web.html.gz beside it (the README's mip command brings them all).
     import asyncio, busservo_web
     asyncio.run(busservo_web.serve(robot, "a password of yours", port=80))
 
-The page: a slider per joint, live positions (about 5 a second), the battery, limp, capture,
-a sequence to add poses to, play (loop, speed), save and load, and a STOP button (Esc) that
-lets every joint go limp. Nothing moves until the page is armed; when the armed page goes
+The page: a slider per joint, live positions (about 5 a second), the battery, limp, capture
+(the pose shown, a number per joint to change, is the pose added), a sequence whose steps can
+each be edited or removed, play (loop, speed), halt, save and load, and a STOP button (Esc)
+that lets every joint go limp. Nothing moves until the page is armed; when the armed page goes
 silent for a second (tab closed, Wi-Fi gone), the stream stops and the joints hold, and a
-sequence stops where the joints are.
-Without the password only the page is served; every other request gets 401. Every request
-is answered, or its connection closed: 503 when too many come at once or the panel fails (out
-of memory, say) before its answer has begun; 408 when it takes over a second to send.
+sequence stops where the joints are. The panel never waits on the wire: the positions it
+reads for a page come through BusServo.ask(), while its loop goes on.
+Installed by mip from lib/busservo_web.json, the modules are .mpy: on a 32-bit board the
+panel then serves within a 56 KB heap (from .py source, about 104 KB).
+Without the password only the page is served (and /favicon.ico: 204); every other request
+gets 401. Every request is answered, or its connection closed: 503 when too many come at once
+or the panel fails (out of memory, say) before its answer has begun; 408 when it takes over a
+second to send.
 """
 
 from typing import Any

@@ -49,6 +49,12 @@ def moves(world):
     return [f for f in world.frames() if f[3] in MOVING]
 
 
+def robot_bus(world):
+    """A BusServo on world's UART and clock (as web_world.robot() makes it)."""
+    busservo.time = bm.time = world.clock
+    return busservo.BusServo(world.uart)
+
+
 def at(world, robot, name, degrees):
     """True if the controller has joint name's servo where degrees put it."""
     joint = robot.joints[name]
@@ -144,6 +150,33 @@ class Page(Tidy):
             self.assertIn(b"Content-Encoding: gzip", head)
 
         run(scenario)
+
+    def test_an_answers_length_is_counted_in_bytes(self):
+        # A joint's name may be é: the Content-Length counts the bytes sent, or the browser
+        # cuts the answer short.
+        world = web_world.live()
+        robot = bm.Robot(robot_bus(world), {"épaule": bm.Joint(1), "coude": bm.Joint(2)})
+        port = next(_ports)
+
+        async def main():
+            server = asyncio.create_task(busservo_web.serve(robot, PASSWORD, port))
+            await asyncio.sleep_ms(50)
+            try:
+                token = await login(port)
+                reply = await send(
+                    port,
+                    b"GET /api/joints HTTP/1.0\r\nAuthorization: Bearer %s\r\n\r\n"
+                    % (token.encode()),
+                )
+                head, _, body = reply.partition(b"\r\n\r\n")
+                self.assertIn(b"Content-Length: %d\r\n" % len(body), head + b"\r\n")
+                self.assertIn("épaule".encode(), body)
+            finally:
+                server.cancel()
+                await asyncio.sleep_ms(20)
+
+        asyncio.new_event_loop()
+        asyncio.run(main())
 
     def test_the_icon_every_browser_asks_for_is_answered_without_a_login(self):
         # The page says it has no icon, but a browser may ask anyway, before the login: a
