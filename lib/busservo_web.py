@@ -438,6 +438,23 @@ class Panel:
         if self.player:
             raise _Refused(409, "a sequence is playing: stop it first")
 
+    def _target(self, token, targets):
+        self._driver(token)
+        self._not_playing()
+        targets = self._pose(targets, "targets")
+        self._orders += 1
+        self.robot.stream(targets)
+        self.limp = False
+
+    def _play(self, token, speed, loop):
+        self._driver(token)
+        if not self.sequence.steps:
+            raise _Refused(409, "the sequence is empty: add poses first")
+        self._orders += 1
+        self.robot.hold()
+        self.player = self.sequence.play(self.robot, speed, loop)
+        self.limp = False
+
     def state(self, token=None):
         """What the page shows; "mine": the page of token has the panel armed."""
         robot = self.robot
@@ -652,12 +669,7 @@ class Panel:
         return self.state(token)
 
     async def _post_target(self, body, token):
-        self._driver(token)
-        self._not_playing()
-        targets = self._pose(body.get("targets"), "targets")
-        self._orders += 1
-        self.robot.stream(targets)
-        self.limp = False
+        self._target(token, body.get("targets"))
         return {}
 
     async def _post_estop(self, body, token):
@@ -714,13 +726,7 @@ class Panel:
 
     async def _post_play(self, body, token):
         speed = 1.0 if body.get("speed") is None else _need(body, "speed", float, 0.1, 10)
-        self._driver(token)
-        if not self.sequence.steps:
-            raise _Refused(409, "the sequence is empty: add poses first")
-        self._orders += 1
-        self.robot.hold()
-        self.player = self.sequence.play(self.robot, speed, bool(body.get("loop")))
-        self.limp = False
+        self._play(token, speed, bool(body.get("loop")))
         return self.state(token)
 
     async def _post_stop(self, body, token):
