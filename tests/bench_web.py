@@ -45,6 +45,7 @@ from shell import scratch, sh, start, stop, wait_for
 web_world = None  # imported after ram() has measured busservo_web's import
 
 PORT = 18301
+_more_ports = iter(range(PORT + 10, PORT + 1000))  # the stall's and the 32-bit port's
 PASSWORD = "bench-pw-1"
 MICROPYTHON32 = sys.argv[sys.argv.index("--32bit") + 1] if "--32bit" in sys.argv else None
 RUNS = 5
@@ -165,7 +166,7 @@ def stall(seconds, pages=True):
 
     world = web_world.live()
     robot = web_world.robot(world)
-    port = PORT + 10
+    port = next(_more_ports)
     worst = [0, 0, 0]  # us: the event loop's, the panel's ticks'; captures
     tick = busservo_web.Panel._tick
     last_tick = [None]
@@ -326,7 +327,7 @@ def board(folder, heap, port, watch=False):
     return bad, printed
 
 
-def heaps(form, port):
+def heaps(form):
     """(the smallest heap in KB the panel in form served at in every run, or None; the next
     heap tried, and how many runs it served)."""
     folder = install(form)
@@ -336,8 +337,7 @@ def heaps(form, port):
         for heap in HEAPS[form]:
             served = 0
             for _ in range(RUNS):
-                port += 1
-                bad, _ = board(folder, heap, port)
+                bad, _ = board(folder, heap, next(_more_ports))
                 served += not bad
             if served < RUNS:
                 failed = (heap, served)
@@ -360,7 +360,7 @@ def ram32():
     try:
         ok, out = sh("MICROPYPATH=.frozen:%s %s -c '%s'" % (folder, MICROPYTHON32, measure))
         kept = [(line.split()[0], int(line.split()[1])) for line in out.strip().split("\n")]
-        bad, printed = board(folder, 256, PORT + 50, watch=True)
+        bad, printed = board(folder, 256, next(_more_ports), watch=True)
         held = [int(line.split()[1]) for line in printed.split("\n") if line[:5] == "held "]
     finally:
         sh("rm -rf " + folder)
@@ -409,7 +409,7 @@ def main(quick=False):
     )
     if MICROPYTHON32:
         for form, how in (("mpy", "as mip installs it (.mpy)"), ("py", "from source (.py)")):
-            smallest, failed = heaps(form, PORT + 100 + 100 * (form == "py"))
+            smallest, failed = heaps(form)
             print(
                 "| heap it serves at, 32-bit port, %s | %s in every run of %d%s | %s |"
                 % (
