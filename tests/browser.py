@@ -456,7 +456,8 @@ class Panel(unittest.TestCase):
         self.assertIsNotNone(until(lambda: panel_state("/api/steps")[0]["ms"] == 700))
         steps = panel_state("/api/steps")
         self.assertEqual([(s["pose"]["base"], s["ms"]) for s in steps], [(-7, 700), (12.5, 1000)])
-        # And removed alone.
+        # And removed alone, once the page lists the edit.
+        self.assertIsNotNone(until(lambda: "base -7," in self.text("steps")))
         b.find_element(By.CSS_SELECTOR, "[aria-label='Remove step 1']").click()
         self.assertIsNotNone(until(lambda: len(panel_state("/api/steps")) == 1))
         self.assertEqual(panel_state("/api/steps")[0]["pose"]["base"], 12.5)
