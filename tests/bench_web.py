@@ -320,9 +320,9 @@ def board(folder, heap, port, watch=False):
     finally:
         stop(pid)
         time.sleep_ms(100)
-    with open(log) as f:
-        printed = f.read()
-    os.remove(log)
+        with open(log) as f:
+            printed = f.read()
+        os.remove(log)
     if "Error" in printed:
         bad.append(printed.strip().split("\n")[-1])
     return bad, printed
