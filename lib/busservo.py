@@ -522,6 +522,8 @@ class BusServo:
                     quiet = time.ticks_diff(time.ticks_ms(), self._heard)
                     if quiet < _GAP_MS + missing * 10000 // self._baud:
                         return None
+                    if budget > 0 and self._any():
+                        continue  # it came while this was away (a GC, a callback): read it
                     self._r = r + 1
                     self.noise += 1
                 else:

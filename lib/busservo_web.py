@@ -7,7 +7,9 @@
 #   asyncio.run(busservo_web.serve(robot, "a password of yours", port=80))
 #
 # The page is one file, lib/busservo_web.html, served gzipped (busservo_web.html.gz
-# beside this module; no internet needed). The web framework is Microdot.
+# beside this module; no internet needed), a chunk at a time from the file. The HTTP
+# side is this module's own, and small: a board without PSRAM has about 110 KB of heap
+# once its Wi-Fi is up, and the panel should leave most of it to the robot's program.
 #
 # Safety. Nothing moves until a page is armed (its switch), and only the page
 # that armed can drive. Disarming, closing that page or losing its connection
@@ -31,20 +33,25 @@
 # Plain HTTP: anyone who can watch the Wi-Fi can read the password. Use a
 # network you trust, or the board's own access point with a WPA2 key.
 #
+# The loop never waits on the wire: the positions a route needs (arm, capture, add,
+# a stop's halt) are read with the driver's ask(), a step every few ms, so the
+# stream, the dead-man and the other pages go on while the reply is on its way.
+#
 # What the page asks for (JSON in and out; errors are {"error": "..."}):
 #   POST /api/login {"password"}   -> {"token"}
 #   GET  /api/joints               -> [{"name", "lo", "hi"}, ...]
 #   GET  /api/state                -> positions in degrees, battery, armed, sequence, ...
+#   GET  /api/steps                -> the sequence: [{"pose": {name: degrees}, "ms"}, ...]
 #   POST /api/arm {"on"}, /api/target {"targets": {name: degrees}}, /api/estop,
-#        /api/limp, /api/capture, /api/add {"ms"}, /api/remove {"index"}, /api/clear,
+#        /api/limp, /api/capture -> {"pose"}, /api/add {"pose", "ms"} (no pose: read now),
+#        /api/edit {"index", "pose", "ms"}, /api/remove {"index"}, /api/clear,
 #        /api/play {"speed", "loop"}, /api/stop, /api/save {"name"}, /api/load {"name"}
 #   GET  /api/sequences            -> ["name", ...]
+# and GET /favicon.ico -> 204, without a login (a browser asks for it before one).
 import asyncio
 import json
 import os
 import time
-
-from microdot import Microdot, Request, Response
 
 import busservo_motion as bm
 
@@ -54,16 +61,18 @@ _REQUEST = 4096  # bytes: a request's line, headers and body; a longer one gets 
 _CLIENT_MS = 10000  # an answer that takes longer is cut
 _SESSIONS = 4  # logins remembered; a new one forgets the oldest
 _BODY = 1024  # bytes: a larger request body gets 413
+_CHUNK = 256  # bytes of the page sent at a time
 _DEAD_MS = 1000  # the armed page silent this long: hold (the dead-man)
 _OPEN_MS = 3000  # a page asked within this: read positions often
 _READ_MS = 150  # positions asked this often while a page is open
 _BATTERY_MS = 2000
 _TICK_MS = 10  # the panel's loop: poll the bus, step the stream and the player
+_ASK_MS = 5  # a query's next step: a byte takes 1 ms at 9600 baud
+_ERROR_MS = 3000  # the loop's last error is shown until this long after it last happened
 _FOLDER = "sequences"
 _NAME_MAX = 24
-_MS_DEFAULT = 1000  # time to reach an added pose, if the page gives none
+_MS_DEFAULT = 1000  # time to reach an added pose, if the request gives none
 _HALT_MS = 100  # a sequence stopped mid-pose: the joints go where they are, in this
-_METHODS = ["GET", "POST", "PUT", "DELETE", "PATCH", "HEAD", "OPTIONS"]
 _NAME_CHARS = "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_"
 
 
@@ -116,21 +125,19 @@ def _need(body, key, kind, low=None, high=None, what=None):
     return value
 
 
-_REASONS = {
-    400: "Bad Request",
-    401: "Unauthorized",
-    404: "Not Found",
-    409: "Conflict",
-    413: "Payload Too Large",
-    500: "Internal Server Error",
-    503: "Service Unavailable",
-    504: "Gateway Timeout",
+# The status lines the panel answers with.
+_STATUS = {
+    200: b"200 OK",
+    204: b"204 No Content",
+    400: b"400 Bad Request",
+    401: b"401 Unauthorized",
+    404: b"404 Not Found",
+    409: b"409 Conflict",
+    413: b"413 Payload Too Large",
+    500: b"500 Internal Server Error",
+    503: b"503 Service Unavailable",
+    504: b"504 Gateway Timeout",
 }
-
-
-def _error(status, why):
-    return Response({"error": why}, status, reason=_REASONS.get(status))
-
 
 # Answers made beforehand, whole: sent where making one could fail (no memory left), or
 # would cost RAM for a connection that is let go (pushed out, or too slow).
@@ -146,22 +153,7 @@ _FAILED = (
     b"HTTP/1.0 503 Service Unavailable\r\nContent-Type: application/json\r\nContent-Length: 67"
     b'\r\n\r\n{"error": "the panel could not answer (out of memory?): try again"}'
 )
-
-
-def _guard(handler):
-    # A route's handler, whose refusals and errors become a 4xx or 5xx with
-    # {"error": why}: nothing is half done, and the server goes on.
-    async def guarded(request, **args):
-        try:
-            return await handler(request, **args)
-        except _Refused as e:
-            return _error(e.status, e.args[0])
-        except (ValueError, TypeError) as e:  # the motion layer's checks
-            return _error(400, str(e))
-        except OSError as e:  # the controller did not answer, or the UART failed
-            return _error(504, "the controller: %r" % (e,))
-
-    return guarded
+_EMPTY = b"HTTP/1.0 204 No Content\r\n\r\n"
 
 
 def _name(body):
@@ -179,9 +171,8 @@ def _name(body):
 
 
 class _Conn:
-    # A connection, as Microdot reads and writes it. It gives a request at most _REQUEST
-    # bytes (MicroPython's readline() has no limit of its own, and a negative
-    # Content-Length would read until the RAM is full), then ValueError: a 400. It notes
+    # A connection, read and written. It gives a request at most _REQUEST bytes
+    # (MicroPython's readline() has no limit of its own), then ValueError: a 400. It notes
     # whether a byte came (a client that said something is told why it is closed) and
     # whether a write went out (until then a failure can still be answered 503).
     def __init__(self, reader, writer):
@@ -204,107 +195,103 @@ class _Conn:
     async def readline(self):
         while b"\n" not in self._buf:
             if not await self._more():
-                break
+                raise ValueError("the request was cut short")
         line, nl, self._buf = self._buf.partition(b"\n")
-        return line + nl
+        return line
 
-    async def readexactly(self, n):
-        if not 0 <= n <= _BODY:
-            raise ValueError("Content-Length %d" % n)
+    async def read(self, n):
+        # n bytes of the body (n <= _BODY), or b"" once the client has sent all.
         while len(self._buf) < n:
             if not await self._more():
-                raise EOFError
+                break
         data, self._buf = self._buf[:n], self._buf[n:]
         return data
 
-    async def read(self, n=-1):
-        # A body too large to keep, read to be dropped (413): not counted.
-        if self._buf:
-            data, self._buf = self._buf, b""
-            return data
-        return await self._reader.read(n)
-
-    async def awrite(self, data):
+    async def write(self, data):
         await self._writer.awrite(data)
         self.sent = True
 
 
-class _App(Microdot):
-    # Microdot, with limits on its connections: a board has few sockets and
-    # little RAM, and the STOP button must get through whatever else comes.
-    # - A request must be in within _HEAD_MS (else 408). When _CLIENTS connections
-    #   are still reading theirs, a new one pushes out the oldest that has sent
-    #   nothing yet, else the oldest (which hears 503). So connections that say
-    #   nothing, or little, hold nothing, and a page's request, sent at once, gets in.
-    # - At most _CLIENTS requests are answered at once, each within _CLIENT_MS;
-    #   more get 503, except a logged-in page's (up to twice as many).
-    # - Every connection ends closed, whatever is raised: an error (a MemoryError,
-    #   say) before its answer has begun is answered 503; after, the answer is cut.
-    def __init__(self, logged_in):
-        super().__init__()
-        self.options_handler = None  # OPTIONS too needs the password (a route below)
-        self._logged_in = logged_in  # request -> True if it comes with a session
-        self._reading = []  # (task, _Conn) of the requests being read, oldest first
-        self.clients = 0  # requests being answered
-
-    async def handle_request(self, reader, writer):
-        conn = None
-        try:
-            conn = _Conn(reader, writer)
-            reading = self._reading
-            if len(reading) >= _CLIENTS:
-                # A request sent whole is read within a few ms: the ones still reading
-                # when more come are the silent, then the slow.
-                out = 0
-                for i in range(len(reading)):
-                    if not reading[i][1].heard:
-                        out = i
-                        break
-                reading.pop(out)[0].cancel()
-            mine = (asyncio.current_task(), conn)
-            reading.append(mine)
+async def _request(conn):
+    # (method, path, the Authorization header's value, the body) of the request on conn.
+    # A malformed one raises ValueError (a 400); a body over _BODY, _Refused (413).
+    method, path, _ = (await conn.readline()).decode().split()
+    path = path.partition("?")[0]
+    auth = ""
+    length = 0
+    while True:
+        line = (await conn.readline()).strip()
+        if not line:
+            break
+        name, colon, value = line.partition(b":")
+        if not colon:
+            raise ValueError("a header with no ':'")
+        name = name.strip().lower()
+        if name == b"content-length":
+            length = int(value)
+            if length < 0:
+                raise ValueError("Content-Length %d" % length)
+        elif name == b"authorization":
+            auth = value.strip().decode()
+    if length > _BODY:
+        # Some of the body read, so that closing does not reset the connection before
+        # the answer has gone; past that, the client hears a reset.
+        for _ in range(8):
             try:
-                request = await asyncio.wait_for_ms(
-                    Request.create(self, conn, conn, writer.get_extra_info("peername")),
-                    _HEAD_MS,
-                )
+                if not await asyncio.wait_for_ms(conn.read(_BODY), 100):
+                    break
             except asyncio.TimeoutError:
-                if conn.heard:
-                    await conn.awrite(_LATE)
-                return
-            except asyncio.CancelledError:  # pushed out by a newer connection
-                if conn.heard:
-                    await conn.awrite(_BUSY)
-                return
-            except (OSError, MemoryError):
-                raise  # gone, or out of memory: below
-            except Exception:  # malformed or too long: Microdot answers None with 400
-                request = None
-            finally:
-                if mine in reading:
-                    reading.remove(mine)
-            if self.clients >= _CLIENTS and (
-                self.clients >= 2 * _CLIENTS or not self._logged_in(request)
-            ):
-                await conn.awrite(_BUSY)
-                return
-            self.clients += 1
-            try:
-                response = await asyncio.wait_for_ms(self.dispatch_request(request), _CLIENT_MS)
-                if response is not Response.already_handled:
-                    await asyncio.wait_for_ms(response.write(conn), _CLIENT_MS)
-            finally:
-                self.clients -= 1
-        except OSError:
-            pass  # the client has gone
-        except Exception:  # out of memory, say, or an answer over _CLIENT_MS
-            if not (conn and conn.sent):
-                try:
-                    await writer.awrite(_FAILED)
-                except Exception:
-                    pass
-        finally:
-            await _close(writer)
+                break
+        raise _Refused(413, "the body is over %d bytes" % _BODY)
+    body = await conn.read(length) if length else b""
+    if len(body) < length:
+        raise ValueError("the body was cut short")
+    return method, path, auth, body
+
+
+async def _answer(conn, status, answer):
+    # A JSON answer (None: no body, 204).
+    if answer is None:
+        await conn.write(_EMPTY)
+        return
+    data = json.dumps(answer).encode()  # its length in bytes: a joint's name may be é
+    await conn.write(
+        b"HTTP/1.0 %s\r\nContent-Type: application/json\r\nContent-Length: %d\r\n\r\n"
+        % (_STATUS[status], len(data))
+    )
+    await conn.write(data)
+
+
+async def _page(conn, head):
+    # The page, from its file a chunk at a time (head: its headers only).
+    with open(_PAGE, "rb") as f:
+        size = f.seek(0, 2)
+        f.seek(0)
+        await conn.write(
+            b"HTTP/1.0 200 OK\r\nContent-Type: text/html; charset=utf-8\r\n"
+            b"Content-Encoding: gzip\r\nContent-Length: %d\r\n"
+            b"X-Frame-Options: DENY\r\nCache-Control: no-cache\r\n\r\n" % size
+        )
+        if head:
+            return
+        buf = bytearray(_CHUNK)
+        view = memoryview(buf)
+        while True:
+            n = f.readinto(buf)
+            if not n:
+                break
+            await conn.write(view[:n])
+
+
+class _Known:
+    # Stands in for the bus inside robot.where(), which reads with read_positions():
+    # the positions the panel has just read with ask(), so that where() need not ask
+    # again (and block). busservo_motion has no query that does not block.
+    def __init__(self, positions):
+        self.positions = positions
+
+    def read_positions(self, ids, timeout_ms=None):
+        return {i: self.positions[i] for i in ids}
 
 
 async def _close(writer):
@@ -315,11 +302,16 @@ async def _close(writer):
 
 
 class Panel:
-    """The panel's state and its loop, for serve(); a test may drive one directly."""
+    """The panel's state, its loop and its HTTP side, for serve(); a test may drive one
+    directly."""
 
     def __init__(self, robot, password):
         if type(password) is not str or len(password) < 8:
-            raise ValueError("password must be a str of 8 or more characters, got %r" % password)
+            # Why, never the password itself: the message may end up in a log or on a screen.
+            got = type(password).__name__
+            if got == "str":
+                got = "%d characters" % len(password)
+            raise ValueError("password must be a str of 8 or more characters, got " + got)
         self.robot = robot
         self.bus = robot.bus
         self._ids = [robot.joints[name].servo_id for name in robot.names]
@@ -327,13 +319,21 @@ class Panel:
         self._sessions = []  # [token, ticks_ms last seen], oldest first
         self.armed = None  # the token of the page that armed, or None
         self.sequence = bm.Sequence()
+        self.edits = 0  # changes to the sequence: the page reads it again when this grows
         self.player = None
         self.error = None  # the last error of the loop, for the page
+        self._error_at = 0
         self.limp = False  # joints let go by limp() or estop(), until the next move
+        self._orders = 0  # bumped by each order: a halt or an arm begun before one is void
+        self._halting = None  # the task that halts a sequence stopped mid-pose
+        self._asking = asyncio.Lock()  # one query of the panel's on the bus at a time
         now = time.ticks_ms()
         self._seen = time.ticks_add(now, -_OPEN_MS)  # any page, last
         self._read = self._battery = now
-        self.app = self._routes()
+        # Connections: (task, _Conn) of the requests being read, oldest first; how many
+        # requests are being answered.
+        self._reading = []
+        self._clients = 0
 
     # Sessions.
 
@@ -348,12 +348,11 @@ class Panel:
                 self.disarm()
         return token
 
-    def _session(self, request, note=True):
-        # The session of the request's token (and note it was seen), or None.
-        given = request.headers.get("Authorization", "")
-        if not given.startswith("Bearer "):
+    def _session(self, auth, note=True):
+        # The session of an Authorization header's token (and note it was seen), or None.
+        if not auth.startswith("Bearer "):
             return None
-        given = given[7:].encode()
+        given = auth[7:].encode()
         found = None
         for session in self._sessions:  # all compared: the time says nothing
             if _same(given, session[0].encode()):
@@ -361,6 +360,24 @@ class Panel:
         if found and note:
             found[1] = self._seen = time.ticks_ms()
         return found
+
+    # Reading positions without waiting on the wire.
+
+    async def where(self, names=None):
+        """{name: degrees} of these joints (all by default), as Robot.where() gives them,
+        read now without blocking: the query is the driver's ask(), a step every few ms,
+        while the loop, the stream and the other pages go on."""
+        robot = self.robot
+        names = robot.names if names is None else names
+        ids = [robot.joints[name].servo_id for name in names]
+        async with self._asking:
+            for _ in self.bus.ask(ids):
+                await asyncio.sleep_ms(_ASK_MS)
+            robot.bus = _Known(self.bus.positions)
+            try:
+                return robot.where(names)
+            finally:
+                robot.bus = self.bus
 
     # What the page can do.
 
@@ -371,9 +388,10 @@ class Panel:
         self.stop(halt)
 
     def stop(self, halt=True):
-        """Stop the sequence; with halt, its pose on the way too (which would go
-        on for its ms): the joints it moves are sent where they are now (a read
-        of their positions first, ~30 ms)."""
+        """Stop the sequence; with halt, its pose on the way too (which would go on for
+        its ms): the joints it moves are sent where they are, once a read of their
+        positions has come (about 30 ms; the loop goes on meanwhile)."""
+        self._orders += 1
         player = self.player
         self.player = None
         if player and not player.done:
@@ -382,38 +400,57 @@ class Panel:
                 names = set()
                 for pose, _ in self.sequence.steps:
                     names.update(pose)
-                self.robot.move(self.robot.where(list(names)), ms=_HALT_MS)
+                self._halting = asyncio.create_task(self._halt(list(names), self._orders))
+
+    async def _halt(self, names, orders):
+        try:
+            pose = await self.where(names)
+            if self._orders == orders:  # nothing else ordered since: no stream, no limp
+                self.robot.move(pose, ms=_HALT_MS)
+        except Exception as e:  # the controller did not answer: the pose is reached
+            self._failed(e)
 
     def estop(self):
         self.disarm(halt=False)  # at once: the joints go limp
         self.limp = True
         self.robot.estop()
 
+    def _failed(self, e):
+        self.error = "%s: %s" % (type(e).__name__, e)
+        self._error_at = time.ticks_ms()
+
     def _driver(self, token):
         if self.armed != token:
             raise _Refused(409, "arm the panel first (another page may have it armed)")
 
-    def _target(self, token, targets):
-        self._driver(token)
-        self._not_playing()
-        if type(targets) is not dict or not targets:
-            raise _Refused(400, "targets must be {joint: degrees}, got %r" % (targets,))
-        for name in targets:
+    def _pose(self, pose, what):
+        # A pose {joint: degrees}, checked: known joints, within their limits.
+        if type(pose) is not dict or not pose:
+            raise _Refused(400, "%s must be {joint: degrees}, got %r" % (what, pose))
+        for name in pose:
             joint = self.robot.joints.get(name)
             if joint is None:
                 raise _Refused(400, "no joint %r: the joints are %s" % (name, self.robot.names))
-            _need(targets, name, float, joint.lo, joint.hi, "targets[%r]" % name)
-        self.robot.stream(targets)
-        self.limp = False
+            _need(pose, name, float, joint.lo, joint.hi, "%s[%r]" % (what, name))
+        return pose
 
     def _not_playing(self):
         if self.player:
             raise _Refused(409, "a sequence is playing: stop it first")
 
+    def _target(self, token, targets):
+        self._driver(token)
+        self._not_playing()
+        targets = self._pose(targets, "targets")
+        self._orders += 1
+        self.robot.stream(targets)
+        self.limp = False
+
     def _play(self, token, speed, loop):
         self._driver(token)
         if not self.sequence.steps:
             raise _Refused(409, "the sequence is empty: add poses first")
+        self._orders += 1
         self.robot.hold()
         self.player = self.sequence.play(self.robot, speed, loop)
         self.limp = False
@@ -428,6 +465,8 @@ class Panel:
             p = positions.get(joint.servo_id)
             at.append(None if p is None else round(joint.degrees(p), 1))
         player = self.player
+        if self.error and time.ticks_diff(time.ticks_ms(), self._error_at) > _ERROR_MS:
+            self.error = None  # over: it has not happened again for a while
         return {
             "at": at,
             "battery": self.bus.battery,
@@ -435,6 +474,7 @@ class Panel:
             "mine": token is not None and self.armed == token,
             "limp": self.limp,
             "steps": [ms for _, ms in self.sequence.steps],
+            "edits": self.edits,
             "playing": player.index if player else None,
             "updates": robot.updates,
             "error": self.error,
@@ -448,7 +488,7 @@ class Panel:
             try:
                 self._tick()
             except Exception as e:  # the panel must go on, and say so
-                self.error = "%s: %s" % (type(e).__name__, e)
+                self._failed(e)
                 try:
                     self.stop()
                 except Exception:
@@ -470,8 +510,8 @@ class Panel:
                 self.player = None
             else:
                 self.player.step()
-        if bus.wire_ms():
-            return  # the stream and the player come first
+        if bus.wire_ms() or self._asking.locked():
+            return  # the stream, the player and a route's query come first
         open_ = time.ticks_diff(now, self._seen) < _OPEN_MS
         if time.ticks_diff(now, self._read) >= (_READ_MS if open_ else _OPEN_MS):
             self._read = now
@@ -480,230 +520,258 @@ class Panel:
             self._battery = now
             bus.request_battery()
 
-    # The web server's routes.
+    # The HTTP side. Each connection carries one request (HTTP/1.0), and is then closed.
+    # - A request must be in within _HEAD_MS (else 408). When _CLIENTS connections are
+    #   still reading theirs, a new one pushes out the oldest that has sent nothing yet,
+    #   else the oldest (which hears 503). So connections that say nothing, or little,
+    #   hold nothing, and a page's request, sent at once, gets in.
+    # - At most _CLIENTS requests are answered at once, each within _CLIENT_MS; more
+    #   get 503, except a logged-in page's (up to twice as many).
+    # - Every connection ends closed, whatever is raised: an error (a MemoryError, say)
+    #   before its answer has begun is answered 503; after, the answer is cut.
 
-    def _routes(self):
-        app = _App(lambda request: request and self._session(request, note=False))
-        panel = self
-        robot = self.robot
-
-        def refuse(status, why):
-            return _error(status, why)
-
-        @app.before_request
-        async def check(request):
-            # Only the page and the login are served without a session.
-            if request.content_length > _BODY:
-                return refuse(413, "the body is over %d bytes" % _BODY)
-            if request.path in ("/", "/api/login"):
-                return None
-            session = panel._session(request)
-            if session is None:
-                return refuse(401, "log in first")
-            request.g.token = session[0]
-            if request.method == "POST":
-                try:
-                    body = json.loads(request.body) if request.body else {}
-                except ValueError:
-                    return refuse(400, "the body is not JSON")
-                if type(body) is not dict:
-                    return refuse(400, "the body must be a JSON object, got %r" % (body,))
-                request.g.body = body
-            return None
-
-        @app.errorhandler(413)
-        async def too_large(request):
-            # Some of the body read, so that closing does not reset the connection
-            # before the answer has gone; past that, the client hears a reset.
-            try:
-                for _ in range(8):
-                    if not await asyncio.wait_for_ms(request.stream.read(_BODY), 100):
+    async def handle_request(self, reader, writer):
+        """Answer the request of one connection, then close it (serve()'s server calls
+        this for each)."""
+        conn = None
+        try:
+            conn = _Conn(reader, writer)
+            reading = self._reading
+            if len(reading) >= _CLIENTS:
+                # A request sent whole is read within a few ms: the ones still reading
+                # when more come are the silent, then the slow.
+                out = 0
+                for i in range(len(reading)):
+                    if not reading[i][1].heard:
+                        out = i
                         break
-            except (asyncio.TimeoutError, OSError):
-                pass
-            return refuse(413, "the body is over %d bytes" % _BODY)
-
-        @app.errorhandler(400)
-        async def bad(request):
-            return refuse(400, "bad request")
-
-        @app.errorhandler(MemoryError)
-        async def no_memory(request, e):
-            # Written here (Microdot then writes nothing): making an answer could fail too.
-            await request.sock[1].awrite(_FAILED)
-            return Response.already_handled
-
-        @app.route("/")
-        @_guard
-        async def page(request):
-            response = Response.send_file(
-                _PAGE, content_type="text/html; charset=utf-8", compressed=True
-            )
-            response.headers["X-Frame-Options"] = "DENY"  # not inside another site's page
-            response.headers["Cache-Control"] = "no-cache"
-            return response
-
-        @app.post("/api/login")
-        @_guard
-        async def login(request):
+                reading.pop(out)[0].cancel()
+            mine = (asyncio.current_task(), conn)
+            reading.append(mine)
             try:
-                body = json.loads(request.body)
-            except ValueError:
-                body = None
-            if type(body) is not dict:
-                return refuse(400, 'the body must be {"password": "..."}')
-            token = panel._login(body.get("password"))
-            if token is None:
-                await asyncio.sleep_ms(500)  # a guess costs time
-                return refuse(401, "wrong password")
-            return {"token": token}
-
-        @app.get("/api/joints")
-        @_guard
-        async def joints(request):
-            return [
-                {"name": n, "lo": robot.joints[n].lo, "hi": robot.joints[n].hi}
-                for n in robot.names
-            ]
-
-        @app.get("/api/state")
-        @_guard
-        async def state(request):
-            return panel.state(request.g.token)
-
-        @app.post("/api/arm")
-        @_guard
-        async def arm(request):
-            on = _need(request.g.body, "on", bool)
-            if on:
-                if panel.armed not in (None, request.g.token):
-                    raise _Refused(409, "another page has the panel armed")
-                robot.hold()  # arming moves nothing: targets come from the page
-                robot.where()  # where the joints are (a joint with a dps limit needs it)
-                panel.armed = request.g.token
-            elif panel.armed == request.g.token:
-                panel.disarm()
-            return panel.state(request.g.token)
-
-        @app.post("/api/target")
-        @_guard
-        async def target(request):
-            panel._target(request.g.token, request.g.body.get("targets"))
-            return {}
-
-        @app.post("/api/estop")
-        @_guard
-        async def estop(request):
-            panel.estop()
-            return panel.state(request.g.token)
-
-        @app.post("/api/limp")
-        @_guard
-        async def limp(request):
-            panel.disarm(halt=False)  # limp stops every joint, even with no controller
-            robot.limp()
-            panel.limp = True
-            return panel.state(request.g.token)
-
-        @app.post("/api/capture")
-        @_guard
-        async def capture(request):
-            return {"pose": robot.capture()}
-
-        @app.post("/api/add")
-        @_guard
-        async def add(request):
-            body = request.g.body
-            ms = _MS_DEFAULT if body.get("ms") is None else _need(body, "ms", int, 0, 65535)
-            panel.sequence.append(robot.capture(), ms)
-            return panel.state(request.g.token)
-
-        @app.post("/api/remove")
-        @_guard
-        async def remove(request):
-            steps = panel.sequence.steps
-            i = _need(request.g.body, "index", int, 0, max(0, len(steps) - 1))
-            if not steps or panel.player:
-                raise _Refused(409, "nothing to remove, or a sequence is playing")
-            steps.pop(i)
-            return panel.state(request.g.token)
-
-        @app.post("/api/clear")
-        @_guard
-        async def clear(request):
-            panel._not_playing()
-            panel.sequence = bm.Sequence()
-            return panel.state(request.g.token)
-
-        @app.post("/api/play")
-        @_guard
-        async def play(request):
-            body = request.g.body
-            speed = 1.0 if body.get("speed") is None else _need(body, "speed", float, 0.1, 10)
-            loop = bool(body.get("loop"))
-            panel._play(request.g.token, speed, loop)
-            return panel.state(request.g.token)
-
-        @app.post("/api/stop")
-        @_guard
-        async def stop(request):
-            panel.stop()
-            return panel.state(request.g.token)
-
-        @app.get("/api/sequences")
-        @_guard
-        async def sequences(request):
+                request = await asyncio.wait_for_ms(_request(conn), _HEAD_MS)
+            except asyncio.TimeoutError:
+                if conn.heard:
+                    await conn.write(_LATE)
+                return
+            except asyncio.CancelledError:  # pushed out by a newer connection
+                if conn.heard:
+                    await conn.write(_BUSY)
+                return
+            except _Refused as e:  # too large
+                request = e
+            except (ValueError, UnicodeError):  # malformed, cut short, or too long
+                request = _Refused(400, "bad request")
+            finally:
+                if mine in reading:
+                    reading.remove(mine)
+            if self._clients >= _CLIENTS and (
+                self._clients >= 2 * _CLIENTS
+                or type(request) is not tuple
+                or not self._session(request[2], note=False)
+            ):
+                await conn.write(_BUSY)
+                return
+            self._clients += 1
             try:
-                names = os.listdir(_FOLDER)
-            except OSError:
-                names = []
-            return sorted(n[:-5] for n in names if n.endswith(".json"))
+                await asyncio.wait_for_ms(self._dispatch(conn, request), _CLIENT_MS)
+            finally:
+                self._clients -= 1
+        except OSError:
+            pass  # the client has gone
+        except Exception:  # out of memory, say, or an answer over _CLIENT_MS
+            if not (conn and conn.sent):
+                try:
+                    await writer.awrite(_FAILED)
+                except Exception:
+                    pass
+        finally:
+            await _close(writer)
 
-        @app.post("/api/save")
-        @_guard
-        async def save(request):
-            path = _name(request.g.body)
-            if not panel.sequence.steps:
-                raise _Refused(409, "the sequence is empty: add poses first")
-            try:
-                os.mkdir(_FOLDER)
-            except OSError:
-                pass  # it is there
-            try:
-                panel.sequence.save(path)
-            except OSError as e:  # the board's filesystem, not the controller
-                raise _Refused(500, "could not save %s: %r" % (path, e))
-            return {}
+    async def _dispatch(self, conn, request):
+        # Answer a request: the route's answer, or why not ({"error": why}).
+        try:
+            if type(request) is not tuple:
+                raise request  # refused as it was read
+            method, path, auth, body = request
+            if path == "/" and method in ("GET", "HEAD"):
+                await _page(conn, method == "HEAD")
+                return
+            if path == "/favicon.ico" and method == "GET":
+                await _answer(conn, 204, None)  # no icon: nothing to log in for
+                return
+            name = path[5:] if path.startswith("/api/") else ""
+            if name == "login" and method == "POST":
+                answer = await self._post_login(body)
+            else:
+                session = self._session(auth)
+                if session is None:
+                    raise _Refused(401, "log in first")
+                handler = None
+                if name.isalpha() and method in ("GET", "POST"):
+                    handler = getattr(self, "_%s_%s" % (method.lower(), name), None)
+                if handler is None:
+                    raise _Refused(404, "no such page")
+                if method == "POST":
+                    try:
+                        body = json.loads(body) if body else {}
+                    except ValueError:
+                        raise _Refused(400, "the body is not JSON")
+                    if type(body) is not dict:
+                        raise _Refused(400, "the body must be a JSON object, got %r" % (body,))
+                answer = await handler(body, session[0])
+            status = 200
+        except _Refused as e:
+            status, answer = e.status, {"error": e.args[0]}
+        except (ValueError, TypeError) as e:  # the motion layer's checks
+            status, answer = 400, {"error": str(e)}
+        except OSError as e:  # the controller did not answer, or the UART failed
+            status, answer = 504, {"error": "the controller: %r" % (e,)}
+        await _answer(conn, status, answer)
 
-        @app.post("/api/load")
-        @_guard
-        async def load(request):
-            path = _name(request.g.body)
-            panel._not_playing()
-            try:
-                sequence = bm.Sequence.load(path)
-            except OSError:
-                raise _Refused(404, "no sequence %r" % request.g.body["name"])
-            except (ValueError, KeyError, TypeError) as e:
-                raise _Refused(400, "%s is not a sequence: %s" % (path, e))
-            for pose, _ in sequence.steps:
-                for name in pose:
-                    if name not in robot.joints:
-                        raise _Refused(
-                            400, "%s moves joint %r, which this robot has not" % (path, name)
-                        )
-            panel.sequence = sequence
-            return panel.state(request.g.token)
+    # The routes: _METHOD_NAME(body, token) for /api/NAME. A GET's body is not read.
 
-        # Anything else: 401 without a session (before_request), else 404.
-        @app.route(
-            "/<path:path>", methods=["GET", "POST", "PUT", "DELETE", "PATCH", "HEAD", "OPTIONS"]
-        )
-        @_guard
-        async def other(request, path):
-            return refuse(404, "no such page")
+    async def _post_login(self, body):
+        try:
+            body = json.loads(body)
+        except ValueError:
+            body = None
+        if type(body) is not dict:
+            raise _Refused(400, 'the body must be {"password": "..."}')
+        token = self._login(body.get("password"))
+        if token is None:
+            await asyncio.sleep_ms(500)  # a guess costs time
+            raise _Refused(401, "wrong password")
+        return {"token": token}
 
-        return app
+    async def _get_joints(self, body, token):
+        joints = self.robot.joints
+        return [{"name": n, "lo": joints[n].lo, "hi": joints[n].hi} for n in self.robot.names]
+
+    async def _get_state(self, body, token):
+        return self.state(token)
+
+    async def _get_steps(self, body, token):
+        return [{"pose": pose, "ms": ms} for pose, ms in self.sequence.steps]
+
+    async def _post_arm(self, body, token):
+        if _need(body, "on", bool):
+            if self.armed not in (None, token):
+                raise _Refused(409, "another page has the panel armed")
+            orders = self._orders
+            self.robot.hold()  # arming moves nothing: targets come from the page
+            await self.where()  # where the joints are (a joint with a dps limit needs it)
+            if self._orders != orders or self.armed not in (None, token):
+                raise _Refused(409, "stopped, or armed elsewhere, while arming: arm again")
+            self.armed = token
+        elif self.armed == token:
+            self.disarm()
+        return self.state(token)
+
+    async def _post_target(self, body, token):
+        self._target(token, body.get("targets"))
+        return {}
+
+    async def _post_estop(self, body, token):
+        self.estop()
+        return self.state(token)
+
+    async def _post_limp(self, body, token):
+        self.disarm(halt=False)  # limp stops every joint, even with no controller
+        self.robot.limp()
+        self.limp = True
+        return self.state(token)
+
+    async def _post_capture(self, body, token):
+        return {"pose": await self.where()}
+
+    async def _post_add(self, body, token):
+        # The pose given (the one the page showed, maybe edited), else the one read now.
+        ms = _MS_DEFAULT if body.get("ms") is None else _need(body, "ms", int, 0, 65535)
+        pose = body.get("pose")
+        pose = await self.where() if pose is None else self._pose(pose, "pose")
+        self.sequence.append(pose, ms)
+        self.edits += 1
+        return self.state(token)
+
+    def _step(self, body):
+        # The index of a step of the sequence, checked; none while it plays.
+        steps = self.sequence.steps
+        if not steps:
+            raise _Refused(409, "the sequence is empty")
+        self._not_playing()
+        return _need(body, "index", int, 0, len(steps) - 1)
+
+    async def _post_edit(self, body, token):
+        i = self._step(body)
+        pose, ms = self.sequence.steps[i]
+        if body.get("pose") is not None:
+            pose = dict(self._pose(body["pose"], "pose"))
+        if body.get("ms") is not None:
+            ms = _need(body, "ms", int, 0, 65535)
+        self.sequence.steps[i] = (pose, ms)
+        self.edits += 1
+        return self.state(token)
+
+    async def _post_remove(self, body, token):
+        self.sequence.steps.pop(self._step(body))
+        self.edits += 1
+        return self.state(token)
+
+    async def _post_clear(self, body, token):
+        self._not_playing()
+        self.sequence = bm.Sequence()
+        self.edits += 1
+        return self.state(token)
+
+    async def _post_play(self, body, token):
+        speed = 1.0 if body.get("speed") is None else _need(body, "speed", float, 0.1, 10)
+        self._play(token, speed, bool(body.get("loop")))
+        return self.state(token)
+
+    async def _post_stop(self, body, token):
+        self.stop()
+        return self.state(token)
+
+    async def _get_sequences(self, body, token):
+        try:
+            names = os.listdir(_FOLDER)
+        except OSError:
+            names = []
+        return sorted(n[:-5] for n in names if n.endswith(".json"))
+
+    async def _post_save(self, body, token):
+        path = _name(body)
+        if not self.sequence.steps:
+            raise _Refused(409, "the sequence is empty: add poses first")
+        try:
+            os.mkdir(_FOLDER)
+        except OSError:
+            pass  # it is there
+        try:
+            self.sequence.save(path)
+        except OSError as e:  # the board's filesystem, not the controller
+            raise _Refused(500, "could not save %s: %r" % (path, e))
+        return {}
+
+    async def _post_load(self, body, token):
+        path = _name(body)
+        self._not_playing()
+        try:
+            sequence = bm.Sequence.load(path)
+        except OSError:
+            raise _Refused(404, "no sequence %r" % body["name"])
+        except (ValueError, KeyError, TypeError) as e:
+            raise _Refused(400, "%s is not a sequence: %s" % (path, e))
+        for pose, _ in sequence.steps:
+            for name in pose:
+                if name not in self.robot.joints:
+                    raise _Refused(
+                        400, "%s moves joint %r, which this robot has not" % (path, name)
+                    )
+        self.sequence = sequence
+        self.edits += 1
+        return self.state(token)
 
 
 async def serve(robot, password, port=80):
@@ -714,13 +782,18 @@ async def serve(robot, password, port=80):
         os.stat(_PAGE)
     except OSError:
         raise OSError(2, "the page %s is missing: install it beside busservo_web" % _PAGE)
-    Request.max_content_length = Request.max_body_length = _BODY  # all Microdot apps here
     loop = asyncio.create_task(panel.run())
+    server = None
     try:
-        await panel.app.start_server(host="0.0.0.0", port=port)
+        # Each connection through the attribute, so that a test may wrap it.
+        server = await asyncio.start_server(
+            lambda r, w: panel.handle_request(r, w), "0.0.0.0", port
+        )
+        await server.wait_closed()
     finally:
         loop.cancel()
-        server = getattr(panel.app, "server", None)
         if server:
             server.close()
         panel.disarm()
+        if panel._halting:
+            await panel._halting  # a sequence stopped mid-pose: where the joints are

@@ -57,8 +57,8 @@ def controller():
         return json.load(r)
 
 
-def panel_state():
-    """The panel's /api/state, as a second page (logged in here) sees it."""
+def panel_state(path="/api/state"):
+    """The panel's /api/state (or another GET), as a second page (logged in here) sees it."""
 
     def call(path, body=None, token=None):
         request = urllib.request.Request(
@@ -76,7 +76,7 @@ def panel_state():
         if _token is None:
             _token = call("/api/login", {"password": PASSWORD})["token"]
         try:
-            return call("/api/state", token=_token)
+            return call(path, token=_token)
         except urllib.error.HTTPError as e:
             if e.code != 401:
                 raise
@@ -112,6 +112,8 @@ class Panel(unittest.TestCase):
             [
                 "sh",
                 "boards/unix.sh",
+                "-X",  # the world keeps each byte its line carried: room for the whole run
+                "heapsize=16M",
                 "tests/web_world.py",
                 "--port",
                 str(PORT),
@@ -151,6 +153,7 @@ class Panel(unittest.TestCase):
         ):
             options.add_argument(flag)
         options.add_argument("--user-data-dir=" + _fresh_dir())
+        options.set_capability("goog:loggingPrefs", {"browser": "ALL"})  # its console
         # A phone: 390 x 844 CSS pixels, touch.
         options.add_experimental_option(
             "mobileEmulation",
@@ -207,6 +210,27 @@ class Panel(unittest.TestCase):
 
     def press(self, element_id):
         self.browser.find_element(By.ID, element_id).click()
+
+    def text(self, element_id):
+        return self.browser.find_element(By.ID, element_id).text
+
+    def seen(self):
+        """All the text the page shows."""
+        return self.browser.find_element(By.TAG_NAME, "body").text
+
+    def step_count(self):
+        return len(self.browser.find_elements(By.CSS_SELECTOR, "#steps li"))
+
+    def move_base_to(self, degrees):
+        """Drag the base's slider to about degrees; its value, once the servo is there."""
+        s = self.slider("base")
+        here = float(s.get_attribute("value"))
+        ActionChains(self.browser).click_and_hold(s).move_by_offset(
+            round((degrees - here) / 240 * s.size["width"]), 0
+        ).release().perform()
+        value = float(s.get_attribute("value"))
+        self.assertIsNotNone(until(lambda: self.reached(1, value), 6.0), value)
+        return value
 
     def reached(self, servo_id, degrees):
         return controller()["at"][str(servo_id)] == position(degrees)
@@ -335,6 +359,139 @@ class Panel(unittest.TestCase):
         self.assertIsNotNone(took, "still armed 2.5 s after the connection was lost")
         # The last request may have come up to 200 ms before the drop (the page's poll).
         self.assertTrue(0.6 <= time.monotonic() - start <= DEAD_MS / 1000 + 0.4, took)
+
+    # The panel as a newcomer used it (issue: the first hour on a real board).
+
+    def test_8_one_button_says_stop_the_sequences_says_halt(self):
+        self.open_and_log_in()
+        buttons = self.browser.find_elements(By.TAG_NAME, "button")
+        stops = [b.get_attribute("id") for b in buttons if "stop" in b.text.lower()]
+        self.assertEqual(stops, ["stop"])  # the emergency one, red, in the title bar
+        self.assertEqual(self.text("halt"), "Halt")
+
+    def test_9_a_message_covers_no_button_and_goes_when_it_is_over(self):
+        b = self.browser
+        self.open_and_log_in()
+        self.press("save")  # no name: the board says why
+        self.assertIsNotNone(until(lambda: "name must be" in self.seen()))
+        # Every button, scrolled to the foot of the screen, is there to be pressed.
+        covered = b.execute_script(
+            """
+            const out = [];
+            for (const el of document.querySelectorAll("#panel button, #panel input")) {
+              if (!el.offsetParent) continue;  // not shown
+              el.scrollIntoView(false);
+              const r = el.getBoundingClientRect();
+              const top = document.elementFromPoint(r.x + r.width / 2, r.y + r.height / 2);
+              if (!el.contains(top) && !(top && top.contains(el)))
+                out.push((el.id || el.textContent) + " under " + (top && (top.id || top.tagName)));
+            }
+            return out;
+            """
+        )
+        self.assertEqual(covered, [])
+        self.press("limp")  # the next thing done: the old message goes
+        self.assertIsNotNone(until(lambda: "name must be" not in self.seen()), "it stays")
+        self.assertIn("Limp: pose the arm by hand", self.seen())
+        self.assertIsNotNone(until(lambda: "Limp:" not in self.seen(), 6.0), "news stays")
+        # The board's error shows while it lasts, and goes once the board says it is over
+        # (here the page's /api/state answers are given an error, then not).
+        b.execute_script(
+            """
+            window.boardError = "OSError: [Errno 5] EIO";
+            const fetch0 = window.fetch;
+            window.fetch = async (url, options) => {
+              const r = await fetch0(url, options);
+              if (!String(url).endsWith("/api/state") || !window.boardError) return r;
+              const state = await r.json();
+              state.error = window.boardError;
+              return new Response(JSON.stringify(state), { status: 200 });
+            };
+            """
+        )
+        self.assertIsNotNone(until(lambda: "OSError: [Errno 5]" in self.seen()))
+        b.execute_script("window.boardError = null;")
+        self.assertIsNotNone(
+            until(lambda: "OSError" not in self.seen(), 2.0), "the old error stays"
+        )
+
+    def test_10_a_wrong_password_is_said_in_words(self):
+        b = self.browser
+        b.get(URL)
+        b.find_element(By.ID, "pw").send_keys("not-the-password" + Keys.ENTER)
+        self.assertIsNotNone(
+            until(lambda: "wrong password" in self.text("login").lower()),
+            "the login form says: %r" % self.text("login"),
+        )
+        self.assertTrue(b.find_element(By.ID, "login").is_displayed())
+
+    def test_11_an_empty_time_adds_no_pose_in_0_ms(self):
+        self.open_and_log_in()
+        self.press("clear")
+        self.assertIsNotNone(until(lambda: panel_state()["steps"] == []))
+        self.browser.find_element(By.ID, "ms").clear()
+        self.press("add")
+        time.sleep(0.5)
+        self.assertEqual(panel_state()["steps"], [])  # nothing added, in 0 ms or any
+        self.assertEqual(self.step_count(), 0)
+        self.assertIn("Give the time to reach the pose: 0 to 65535 ms", self.seen())
+
+    def test_12_what_capture_shows_is_what_is_added_and_a_step_is_edited_or_removed_alone(self):
+        b = self.browser
+        self.open_and_log_in()
+        self.arm()
+        self.press("clear")
+        seen = self.move_base_to(-40)
+        self.press("capture")
+        self.assertIsNotNone(until(lambda: b.find_elements(By.ID, "p-base")))
+        self.assertEqual(float(b.find_element(By.ID, "p-base").get_attribute("value")), seen)
+        self.move_base_to(40)  # the arm moves on; the pose shown stays
+        self.press("add")
+        self.assertIsNotNone(until(lambda: self.step_count() == 1))
+        steps = panel_state("/api/steps")
+        self.assertEqual(steps[0]["pose"]["base"], seen)  # what was seen, not where it is now
+        self.assertEqual(self.browser.find_elements(By.ID, "p-base"), [])  # the box is emptied
+        # A captured pose edited before it is added.
+        self.press("capture")
+        self.assertIsNotNone(until(lambda: b.find_elements(By.ID, "p-base")))
+        box = b.find_element(By.ID, "p-base")
+        box.clear()
+        box.send_keys("12.5")
+        self.press("add")
+        self.assertIsNotNone(until(lambda: self.step_count() == 2))
+        self.assertEqual(panel_state("/api/steps")[1]["pose"]["base"], 12.5)
+        # One captured, then discarded: nothing added.
+        self.press("capture")
+        self.assertIsNotNone(until(lambda: b.find_elements(By.ID, "p-base")))
+        self.press("discard")
+        self.assertEqual(b.find_elements(By.ID, "p-base"), [])
+        # A step edited alone: its pose and its time.
+        b.find_element(By.CSS_SELECTOR, "[aria-label='Edit step 1']").click()
+        box = b.find_element(By.ID, "p-base")
+        box.clear()
+        box.send_keys("-7")
+        ms = b.find_element(By.ID, "ms")
+        ms.clear()
+        ms.send_keys("700")
+        self.assertEqual(self.text("add"), "Save step 1")
+        self.press("add")
+        self.assertIsNotNone(until(lambda: panel_state("/api/steps")[0]["ms"] == 700))
+        steps = panel_state("/api/steps")
+        self.assertEqual([(s["pose"]["base"], s["ms"]) for s in steps], [(-7, 700), (12.5, 1000)])
+        # And removed alone, once the page lists the edit.
+        self.assertIsNotNone(until(lambda: "base -7," in self.text("steps")))
+        b.find_element(By.CSS_SELECTOR, "[aria-label='Remove step 1']").click()
+        self.assertIsNotNone(until(lambda: len(panel_state("/api/steps")) == 1))
+        self.assertEqual(panel_state("/api/steps")[0]["pose"]["base"], 12.5)
+        self.assertIsNotNone(until(lambda: self.step_count() == 1))
+        self.assertIn("base 12.5", self.text("steps"))
+
+    def test_13_the_browser_hears_no_refusal_before_the_login(self):
+        b = self.browser
+        b.get(URL)
+        time.sleep(1.0)  # the page, and whatever the browser asks for beside it
+        refused = [e["message"] for e in b.get_log("browser") if " 401 " in e["message"]]
+        self.assertEqual(refused, [])
 
 
 def _listening(port):

@@ -14,9 +14,12 @@ class Harness(unittest.TestCase):
         page = rows["page, gzipped (raw)"].split("|")[2].split()
         self.assertTrue(int(page[0]) <= 12288, out)
         for name in (
-            "RAM: import busservo_web and Microdot",
+            "RAM: import busservo_web",
             "RAM: serving, one client connected",
         ):
             self.assertTrue(int(rows[name].split("|")[2].split()[0]) > 0, out)
         for joints in ("1 joint", "4 joints"):
             self.assertIn(", 0 lost", rows["latency, slider to wire, " + joints], out)
+        stall = [row for name, row in rows.items() if name.startswith("longest stall")]
+        self.assertEqual(len(stall), 1, out)
+        self.assertIn("the event loop ", stall[0], out)

@@ -16,6 +16,12 @@ TESTS = (
     "test_5_esc_is_the_stop_key",
     "test_6_closing_the_tab_mid_drag_stops_the_stream_within_the_dead_man_time",
     "test_7_a_lost_connection_stops_the_stream_within_the_dead_man_time",
+    "test_8_one_button_says_stop_the_sequences_says_halt",
+    "test_9_a_message_covers_no_button_and_goes_when_it_is_over",
+    "test_10_a_wrong_password_is_said_in_words",
+    "test_11_an_empty_time_adds_no_pose_in_0_ms",
+    "test_12_what_capture_shows_is_what_is_added_and_a_step_is_edited_or_removed_alone",
+    "test_13_the_browser_hears_no_refusal_before_the_login",
 )
 
 _run = None

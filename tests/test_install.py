@@ -47,49 +47,37 @@ class Mip(unittest.TestCase):
 
 
 class MipWeb(unittest.TestCase):
-    # The web panel's package, lib/busservo_web.json: the driver, the motion layer, the panel,
-    # its page and Microdot, in one mip command. Microdot comes from its own repository, which
-    # this machine cannot reach: here a copy of the package file takes it from the Microdot
-    # that .venv/ has (the same version, pinned in boards/unix.sh), served locally.
-    def test_the_web_package_pins_the_microdot_the_tests_use(self):
+    # The web panel's package, lib/busservo_web.json: the driver, the motion layer and the panel,
+    # compiled (lib/mpy/), and its page, in one mip command, from this repository alone.
+    def test_the_web_package_needs_nothing_from_elsewhere(self):
         with open("lib/busservo_web.json") as f:
             package = json.load(f)
-        with open("boards/unix.sh") as f:
-            pinned = f.read().split("microdot==")[1].split()[0].strip('"')
-        self.assertEqual(
-            package["deps"],
-            [["github:miguelgrinberg/microdot/src/microdot/microdot.py", "v" + pinned]],
-        )
+        self.assertEqual(package.get("deps", []), [])
+        for _, path in package["urls"]:
+            os.stat("lib/" + path)
         self.assertEqual(package["version"], version_of_package_json())
 
     def test_mip_installs_the_web_panel_and_all_it_needs(self):
         root = scratch("www")
         target = scratch("mip")
         log = root + ".log"
-        with open("lib/busservo_web.json") as f:
-            package = json.load(f)
-        package["deps"] = [["http://127.0.0.1:PORT/microdot.py", "any"]]
-        sh("mkdir -p %s/lib && cp lib/* %s/lib/" % (root, root))
-        sh("cp .venv/micropython/microdot/microdot.py %s/" % root)
+        sh("mkdir -p %s/lib && cp -R lib/* %s/lib/" % (root, root))
         server = start(".venv/bin/python -u -m http.server --bind 127.0.0.1 -d %s 0" % root, log)
         try:
             banner = wait_for(log, 10000, "port ")
             self.assertTrue(banner, "the HTTP server did not start")
             port = int(banner.split("port ")[1].split()[0])
-            package["deps"][0][0] = package["deps"][0][0].replace("PORT", str(port))
-            with open(root + "/lib/busservo_web.json", "w") as f:
-                json.dump(package, f)
             url = "http://127.0.0.1:%d/lib/busservo_web.json" % port
             ok, out = sh("%s -m mip install --target %s %s" % (MICROPYTHON, target, url))
             self.assertTrue(ok, out)
             self.assertEqual(
                 sorted(os.listdir(target)),
                 [
-                    "busservo.py",
-                    "busservo_motion.py",
+                    "busservo.mpy",
+                    "busservo_board.mpy",  # examples/web_panel.py finds board.py through it
+                    "busservo_motion.mpy",
                     "busservo_web.html.gz",
-                    "busservo_web.py",
-                    "microdot.py",
+                    "busservo_web.mpy",
                 ],
             )
             use = (
@@ -99,7 +87,7 @@ class MipWeb(unittest.TestCase):
             ok, out = sh("MICROPYPATH=.frozen:%s %s -c '%s'" % (target, MICROPYTHON, use))
             self.assertTrue(ok, out)
             size = os.stat("lib/busservo_web.html.gz")[6]
-            self.assertEqual(out.split(), [target + "/busservo_web.py", str(size)])
+            self.assertEqual(out.split(), [target + "/busservo_web.mpy", str(size)])
         finally:
             stop(server)
             sh("rm -rf %s %s %s" % (target, root, log))
@@ -370,12 +358,13 @@ class Manifest(unittest.TestCase):
 
     def test_the_manifest_freezes_files_that_exist(self):
         named, meta = self.run_manifest()
-        self.assertEqual(named, ["lib/busservo.py"])
+        self.assertEqual(named, ["lib/busservo.py", "lib/busservo_board.py"])
         named, meta = self.run_manifest(sim=True, asyncio=True, motion=True)
         self.assertEqual(
             named,
             [
                 "lib/busservo.py",
+                "lib/busservo_board.py",
                 "lib/busservo_sim.py",
                 "lib/busservo_async.py",
                 "lib/busservo_motion.py",
@@ -385,7 +374,13 @@ class Manifest(unittest.TestCase):
             os.stat(path)
         named, meta = self.run_manifest(web=True)  # the panel needs the motion layer
         self.assertEqual(
-            named, ["lib/busservo.py", "lib/busservo_motion.py", "lib/busservo_web.py"]
+            named,
+            [
+                "lib/busservo.py",
+                "lib/busservo_board.py",
+                "lib/busservo_motion.py",
+                "lib/busservo_web.py",
+            ],
         )
         self.assertEqual(meta["version"], version_of_package_json())
 

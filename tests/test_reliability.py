@@ -148,6 +148,22 @@ class Wire(unittest.TestCase):
             self.assertEqual(got, [CMD_ACTION_GROUP_STOP] * 70, port)
             self.assertEqual((bus.positions, bus.noise), ({}, 5), port)
 
+    def test_a_frame_whose_rest_came_while_the_loop_was_away_is_read_not_dropped(self):
+        # A reply is half in; poll() asks any() for more: none yet. Then the loop is away
+        # (a garbage collection, a callback, another task) for 40 ms, and the rest comes
+        # meanwhile. The line looks quiet since the last read, but it is not: once, the
+        # frame's start was taken for noise, the whole reply lost (seen on a busy machine).
+        for half in (14, 16, 18, 20, 22):  # ms after the request: part of the reply is in
+            for port, w, bus in ports():
+                why = (port, half)
+                bus.request_positions([1, 2, 3, 4])  # 8 bytes out, 17 back: in by 26 ms
+                w.clock.advance_ms(half)
+                self.assertIsNone(bus.poll(), why)  # the reply's first bytes are read
+                w.uart.during("any", lambda w=w: w.clock.advance_ms(40), when="after")
+                got = settle(w, bus, 5)
+                self.assertEqual((got, bus.noise), ([CMD_MULT_SERVO_POS_READ], 0), why)
+                self.assertEqual(bus.positions, {1: 500, 2: 500, 3: 500, 4: 500}, why)
+
     def test_a_frame_cut_short_holds_nothing_hostage(self):
         for port, w, bus in ports():
             w.cut_reply(4)  # the battery reply stops after 55 55 04 0F

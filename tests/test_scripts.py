@@ -286,13 +286,12 @@ class SimPtyLink(unittest.TestCase):
 
 FAKE_PYTHON3 = """#!/bin/sh
 # python3 -m venv DIR, and no more: a venv whose pip and micropython note what
-# they are asked and pretend it is done (pip leaves a Microdot package behind).
+# they are asked and pretend it is done.
 [ "$1 $2" = "-m venv" ] || exit 3
 mkdir -p "$3/bin"
 cat >"$3/bin/pip" <<'EOF'
 #!/bin/sh
 echo "$*" >>"$(dirname "$0")/../pip-args"
-mkdir -p "$(dirname "$0")/../lib/python3.0/site-packages/microdot"
 EOF
 cat >"$3/bin/micropython" <<'EOF'
 #!/bin/sh

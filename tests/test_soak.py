@@ -3,9 +3,10 @@
 # The panel (lib/busservo_web.py) with the arm of examples/web_panel.py, on the wire-faithful
 # world (tests/wire.py: an rp2's UART, the 9600-baud line, the simulated controller) and its
 # clock, for 24 simulated hours. Its loop, Panel.run(), runs every 10 ms all day, as
-# serve() runs it; the page's requests go through the panel's Microdot app
-# (dispatch_request: its before_request check, the routes, the JSON), without a socket,
-# so that no real time passes. A small scheduler (_Board) runs the panel's loop and the
+# serve() runs it; the page's requests go to the panel's routes as a connection's would
+# once read (Panel._dispatch(): the session check, the routes, the JSON answer written to
+# the connection), without a socket, so that no real time passes. A small scheduler
+# (_Board) runs the panel's loop and the
 # page as coroutines on the world's clock: busservo_web's asyncio.sleep_ms() is the
 # scheduler's while the soak runs.
 #
@@ -26,7 +27,7 @@
 #
 # A minute into every hour from 1 to 24 (between bursts): the heap after gc.collect(),
 # and the size of every list, dict, set and bytearray reachable from the panel (its
-# sessions and sequence, the Robot, the BusServo, the Microdot app; not the test world,
+# sessions and sequence, the Robot, the BusServo; not the test world,
 # which tests/test_wire.py checks), and how many attributes each object has; the sizes
 # again as that hour's first burst plays the sequence (the player's too). The heap must
 # stay within 1 KB from hour 1 to hour 24, and nothing may be larger than it was at hour
@@ -36,8 +37,6 @@ import json
 import math
 import time
 import unittest
-
-from microdot import Request
 
 import busservo
 import busservo_motion as bm
@@ -51,11 +50,46 @@ PASSWORD = "secret-pw"
 _MS = 1000  # us
 
 
+class _Written:
+    # A connection's writing side: what the panel answers a request.
+    def __init__(self):
+        self.out = b""
+
+    async def write(self, data):
+        self.out += data
+
+
+class _Lock:
+    # asyncio.Lock on the _Board: one holder; another waits a ms at a time.
+    def __init__(self):
+        self.held = False
+
+    def locked(self):
+        return self.held
+
+    async def __aenter__(self):
+        while self.held:
+            await _Asyncio.sleep_ms(1)
+        self.held = True
+
+    async def __aexit__(self, *exc):
+        self.held = False
+
+
 class _Asyncio:
-    # busservo_web's asyncio while the soak runs: what Panel.run() awaits.
+    # busservo_web's asyncio while the soak runs: what the panel awaits and starts.
+    Lock = _Lock
+
+    def __init__(self, board):
+        self._board = board
+
     @staticmethod
     def sleep_ms(ms):
         yield ms  # to the _Board, which resumes the task ms later
+
+    def create_task(self, coro):
+        self._board.start(coro)
+        return coro
 
 
 class _Board:
@@ -142,7 +176,7 @@ class Soak:
         start = (wire.PERIOD - hours * 1800 * 1000, 0)
         self.world = wire.World("rp2", start=start)
         self.board = _Board(self.world.clock)
-        self.robot = self.panel = self.app = None  # made by run(), on the world's clock
+        self.robot = self.panel = None  # made by run(), on the world's clock
         self.heap = [0] * (hours + 1)  # heap after gc.collect() at the start of each hour
         self.first = {}  # sizes() at hour 1: between bursts, and while the sequence plays
         self.grew = []  # (hour, path, size at hour 1, size then) of any that grew
@@ -152,25 +186,20 @@ class Soak:
         self.token = None
 
     async def request(self, method, path, body=None):
-        """The page's request, through the panel's app: (status, the JSON it answered)."""
-        headers = {"Host": "board"}
-        if self.token:
-            headers["Authorization"] = "Bearer " + self.token
-        data = b""
-        if body is not None:
-            data = json.dumps(body).encode()
-            headers["Content-Type"] = "application/json"
-            headers["Content-Length"] = str(len(data))
-        request = Request(self.app, ("10.0.0.2", 50000), method, path, "HTTP/1.1", headers, data)
-        response = await self.app.dispatch_request(request)
+        """The page's request, through the panel's routes: (status, the JSON it answered)."""
+        auth = "Bearer " + self.token if self.token else ""
+        data = json.dumps(body).encode() if body is not None else b""
+        conn = _Written()
+        await self.panel._dispatch(conn, (method, path, auth, data))
+        head, _, answer = conn.out.partition(b"\r\n\r\n")
         if self.leak and path == "/api/state":  # a list in the panel, one more item a poll
             if not hasattr(self.panel, "_leaked"):
                 self.panel._leaked = []
-            self.panel._leaked.append(len(response.body))
+            self.panel._leaked.append(len(answer))
         try:
-            return response.status_code, json.loads(response.body)
-        except ValueError:  # not the panel's JSON: Microdot's 500, say
-            raise AssertionError("%s %s: %r" % (method, path, response.body[:200]))
+            return int(head.split()[1]), json.loads(answer)
+        except (IndexError, ValueError):  # no status line, or not the panel's JSON
+            raise AssertionError("%s %s: %r" % (method, path, conn.out[:200]))
 
     async def login(self):
         self.token = None
@@ -263,11 +292,10 @@ class Soak:
 
     def run(self):
         saved = busservo_web.asyncio, busservo_web.time
-        busservo_web.asyncio, busservo_web.time = _Asyncio, self.world.clock
+        busservo_web.asyncio, busservo_web.time = _Asyncio(self.board), self.world.clock
         try:
             self.robot = web_world.robot(self.world)  # busservo's and bm's time too
             self.panel = busservo_web.Panel(self.robot, PASSWORD)
-            self.app = self.panel.app
             self.board.start(self.panel.run())
             self.board.start(self.page())
             self.board.run_to(self.world.clock.now_us + (self.hours * 3600 + 90) * 1000 * _MS)

