@@ -334,6 +334,18 @@ class Wire(unittest.TestCase):
             self.assertTrue(0 <= more <= 5 + 129 * 127 // 3000, (port, bus.wire_ms(), ahead))
             self.assertEqual(bus.read_battery(), 7500, port)
 
+    def test_back_to_back_moves_are_all_counted_and_a_query_behind_them_waits(self):
+        # move() counts its bytes inline, not through _sent(). Read as an idle wire, a busy
+        # one once left wire_ms() 10 ms behind 20 moves, and the query timed out.
+        for port, w, bus in ports():
+            for start in (0, 50):  # at once, then after the wire has been idle
+                w.clock.advance_ms(start)
+                for i in range(20):
+                    bus.move(1 + i % 6, 500, 0)  # 200 bytes: 208 ms of wire
+                ahead = bus.wire_ms() - w.tx_backlog_us() // 1000
+                self.assertTrue(0 <= ahead <= 2, (port, start, ahead))
+                self.assertEqual(bus.read_battery(), 7500, (port, start))
+
     def test_wire_ms_counts_10_bits_a_byte(self):
         for port, w, bus in ports():
             self.assertEqual(bus.wire_ms(), 0, port)
