@@ -302,6 +302,21 @@ class BadInput(Tidy):
 
         run(scenario)
 
+    def test_remove_past_the_last_step_or_play_over_10x_gets_400_and_changes_nothing(self):
+        async def scenario(port, world, robot):
+            token = await login(port)
+            _panels[-1].sequence.append({"base": 10}, 300)  # a step, with no read
+            status, reply = await http(port, "POST", "/api/remove", {"index": 1}, token)
+            self.assertEqual(status, 400, reply)
+            self.assertEqual(reply["error"], "index must be in 0..0, got 1")
+            status, reply = await http(port, "POST", "/api/play", {"speed": 10.5}, token)
+            self.assertEqual(status, 400, reply)
+            self.assertEqual(reply["error"], "speed must be in 0.1..10, got 10.5")
+            status, reply = await http(port, "GET", "/api/state", token=token)
+            self.assertEqual((reply["steps"], reply["playing"]), ([300], None))
+
+        run(scenario)
+
     def test_a_malformed_request_gets_4xx_and_the_server_goes_on(self):
         async def scenario(port, world, robot):
             token = await login(port)
@@ -844,6 +859,13 @@ class Loop(Tidy):
                     session[1] = panel._seen = w.clock.ticks_ms()
             panel._tick()
             w.clock.advance_ms(10)
+
+    def test_only_the_page_that_armed_is_told_it_drives(self):
+        w, panel, token = self.panel()
+        other = panel._login(PASSWORD)
+        mine = [panel.state(t)["mine"] for t in (token, other, None)]
+        self.assertEqual(mine, [True, False, False])
+        self.assertTrue(panel.state(other)["armed"])
 
     def test_a_sequence_that_has_ended_lets_the_sliders_drive_again(self):
         w, panel, token = self.panel()
