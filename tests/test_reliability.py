@@ -300,6 +300,27 @@ class Wire(unittest.TestCase):
         requests = [f for f in w.frames() if f[3] == CMD_GET_BATTERY_VOLTAGE]
         self.assertEqual((len(requests), w.garbled, w.sim.beeps), (3, 0, 0))
 
+    def test_a_cut_positions_request_finished_by_the_next_command_is_answered(self):
+        # Its reply is a positions event, not noise: the request was counted once finished.
+        w = wire.World("rp2")
+        busservo.time = w.clock
+        bus = busservo.BusServo(w.uart)
+        w.uart.stall(True)  # as above: 3 bytes of room left
+        bus.unload(list(range(1, 11)))
+        for _ in range(27):
+            bus.move(1, 500, 0)
+        try:
+            bus.request_positions([1, 2])  # 3 of its 7 bytes go
+            error = None
+        except OSError as e:
+            error = e.args[0]
+        self.assertEqual(error, errno.EIO)
+        w.uart.stall(False)
+        settle(w, bus, 400)
+        bus.set_group_speed(1, 100)  # sends the cut request's rest first
+        self.assertEqual(settle(w, bus, 100), [CMD_MULT_SERVO_POS_READ])
+        self.assertEqual((bus.positions, bus.noise, w.garbled), ({1: 500, 2: 500}, 0, 0))
+
     def test_a_position_reply_with_other_ids_is_an_event(self):
         for port, w, bus in ports():
             w.noise(b"\x55\x55\x06\x15\x01\x07\xf4\x01")  # servo 7, unasked
