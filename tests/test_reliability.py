@@ -321,6 +321,19 @@ class Wire(unittest.TestCase):
         self.assertEqual(settle(w, bus, 100), [CMD_MULT_SERVO_POS_READ])
         self.assertEqual((bus.positions, bus.noise, w.garbled), ({1: 500, 2: 500}, 0, 0))
 
+    def test_the_longest_reply_handed_over_120_bytes_at_a_time_is_read_whole(self):
+        # An esp32 UART made with timeout_char > 0 keeps ESP-IDF's RX threshold of 120
+        # bytes: the 257-byte reply to 84 ids comes in parts 125 ms apart. The quiet
+        # between them is no cut frame: its missing bytes are still on the wire.
+        w = wire.World("esp32", timeout_char=10)
+        busservo.time = w.clock
+        bus = busservo.BusServo(w.uart)
+        ids = list(range(1, 85))
+        self.assertEqual(bus.read_positions(ids), {i: 500 for i in ids})
+        bus.request_positions(ids)  # and through poll()
+        self.assertEqual(settle(w, bus, 400), [CMD_MULT_SERVO_POS_READ])
+        self.assertEqual(bus.noise, 0)
+
     def test_a_position_reply_with_other_ids_is_an_event(self):
         for port, w, bus in ports():
             w.noise(b"\x55\x55\x06\x15\x01\x07\xf4\x01")  # servo 7, unasked
