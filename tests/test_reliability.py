@@ -20,6 +20,7 @@ from busservo import (
 from test_queries import timed_out
 
 BATTERY_7500 = bytes((0x55, 0x55, 0x04, 0x0F, 0x4C, 0x1D))
+BATTERY_7100 = bytes((0x55, 0x55, 0x04, 0x0F, 0xBC, 0x1B))
 STOP = bytes((0x55, 0x55, 0x02, 0x07))
 
 
@@ -333,6 +334,28 @@ class Wire(unittest.TestCase):
         bus.request_positions(ids)  # and through poll()
         self.assertEqual(settle(w, bus, 400), [CMD_MULT_SERVO_POS_READ])
         self.assertEqual(bus.noise, 0)
+
+    def test_a_late_reply_read_together_with_the_answer_is_not_taken_for_it(self):
+        # The reply to a request given up on ends just after the query's own request has
+        # gone, too soon to answer it, and the answer comes right behind it; one read
+        # brings the two. The first came before that read by the answer's 6 bytes: it is
+        # not the answer, though it was read after the answer could have come.
+        for port, w, bus in ports():
+            w.sim.silent = True  # the replies are written here, when they must come
+            bus.request_battery()
+            w.clock.advance_ms(10)
+            query = bus.ask(None, 50)  # gives up on that reply after 150 ms, then asks
+            for ms in range(200):
+                next(query)
+                if bus.wire_ms():  # its request is on the wire
+                    break
+                if ms == 147:  # the late reply, from 3 ms before that, and the answer
+                    w.noise(BATTERY_7100 + BATTERY_7500)
+                w.clock.advance_ms(1)
+            w.clock.advance_ms(11)  # both in (12.5 ms of line), unread
+            for _ in query:
+                pass
+            self.assertEqual(bus.battery, 7500, port)
 
     def test_a_position_reply_with_other_ids_is_an_event(self):
         for port, w, bus in ports():
