@@ -26,6 +26,11 @@ mutant is "killed?", and not counted as killed.
 
 A mutant that survives, and that no test should kill, has a note in NOTES saying why it
 changes nothing a user could see; a survivor without one wants a test.
+
+The pass of 2026-11-25, on a loaded 2-core machine (busservo.py took about 40 minutes):
+busservo.py 39 of 40 killed, busservo_motion.py 31 of 31, busservo_web.py 29 of 30; the two
+survivors are the equivalent ones in NOTES. Before the tests that pass brought, the suite
+killed 33 of 40, 25 of 31 and 20 of 30 (4 more failed once under load, not confirmed).
 """
 
 import argparse
