@@ -314,6 +314,16 @@ class Resync(unittest.TestCase):
             {"battery": 0x5555, "group": None, "noise": 5},
         )
 
+    def test_a_flood_of_noise_holds_one_poll_for_about_a_kilobyte(self):
+        # A control loop's poll() returns after reading about 1 KB, whatever is waiting;
+        # the frame behind 4000 bytes of noise comes a few calls later.
+        uart, bus = fresh()
+        uart.feed(bytes(4000) + STOP)
+        self.assertEqual(bus.poll(), None)
+        self.assertTrue(2800 <= uart.any() <= 3000, uart.any())
+        got = [bus.poll() for _ in range(4)]
+        self.assertEqual((got[:2], CMD_ACTION_GROUP_STOP in got), ([None, None], True))
+
     def test_memory_stays_bounded_under_endless_noise(self):
         import gc
 

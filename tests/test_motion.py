@@ -148,6 +148,12 @@ class Calibration(Tidy):
         j = bm.Joint(6, kind=bm.PWM_180, limits=(0, 60))
         self.assertEqual((j.position(-10), j.position(75.5), j.position(1e30)), (1500, 2167, 2167))
 
+    def test_a_target_just_past_a_limit_gives_the_limits_position(self):
+        # Within a degree of it too: the limit is the end stop, not a degree past it.
+        j = bm.Joint(6, kind=bm.PWM_180, limits=(0, 60))
+        got = [j.position(d) for d in (-0.5, -1, 60.5, 61, 60.9)]
+        self.assertEqual(got, [1500, 1500, 2167, 2167, 2167])
+
     def test_bad_joints_raise_saying_what_is_allowed_and_what_came(self):
         raises(lambda: bm.Joint(256), "servo_id", "0..255", "256")
         raises(lambda: bm.Joint("1"), "servo_id", "'1'")
@@ -367,6 +373,31 @@ class Safety(Tidy):
         self.assertEqual(moves(w)[-1][1], {1: 604})
         self.assertEqual(w.sim.limp, {2})
 
+    def test_estop_lets_every_joint_go_even_when_the_stop_cannot_be_sent(self):
+        # The UART fails once (an unplugged adapter's EIO): the stop of the action group is
+        # lost, and the joints must still be let go.
+        for port in wire.PORTS:
+            w, bus = world(port)
+            a = arm(bus)
+            a.move({"base": 10}, ms=0)
+            w.uart.fail("write", OSError(5))
+            with self.assertRaises(OSError):
+                a.estop()
+            settle(w, bus, 50)
+            self.assertEqual((commands(w)[-1], w.sim.limp), (CMD_MULT_SERVO_UNLOAD, {1, 2, 6}))
+
+    def test_a_move_after_limp_is_timed_from_where_the_hand_left_the_joint(self):
+        w, bus = world()
+        a = arm(bus)
+        a.move({"base": 0}, ms=0)  # known: at 0
+        settle(w, bus, 50)
+        a.limp(["base"])
+        hand(w, {1: 250})  # -60 degrees
+        self.assertEqual(a.move({"base": 0}, dps=30), 2000)  # read first: 60 degrees away
+        settle(w, bus, 50)
+        self.assertEqual(commands(w)[-2:], [CMD_MULT_SERVO_POS_READ, MOVE])
+        self.assertEqual(moves(w)[-1], (2000, {1: 500}))
+
     def test_hold_drops_the_targets_not_yet_sent_and_sends_nothing(self):
         w, bus = world()
         a = arm(bus)
@@ -469,6 +500,38 @@ class Stream(Tidy):
         self.assertEqual(got[-1][1], {1: 875})  # and it got there, after 1.5 s
         self.assertTrue(robot.slowed > 0)
 
+    def test_a_target_beyond_a_joints_dps_is_reached_in_steps_down_and_up(self):
+        # stream() once; step() goes on until the joint is there, no faster than its dps
+        # (60 degrees/s: 250 positions/s, less the rounding down), whichever way it goes.
+        w, bus = world()
+        robot = bm.Robot(bus, {"j1": bm.Joint(1, dps=60)})
+        robot.where()  # at 0 degrees
+        for target, position in ((-90, 125), (30, 625)):
+            robot.stream({"j1": target})
+            for _ in range(400):  # 4 s: 500 positions take 2 to 2.5 s
+                robot.step()
+                settle(w, bus, 10)
+            got = [(0, {1: 500})] + moves(w)  # from where it was read
+            for (_, before), (ms, after) in zip(got, got[1:]):
+                step = abs(after[1] - before[1])
+                self.assertTrue(step <= 250 * ms // 1000 + 1, (target, step, ms))
+            self.assertEqual(got[-1][1], {1: position}, target)
+            self.assertEqual(w.sim.position(1), position, target)
+
+    def test_a_move_ends_the_stream_and_its_old_targets_never_follow(self):
+        w, bus = world()
+        a = arm(bus)
+        a.stream({"base": 20})
+        a.step()
+        settle(w, bus, 50)
+        a.stream({"base": 25})  # not sent yet
+        a.move({"base": -30}, ms=100)
+        settle(w, bus, 50)
+        self.assertFalse(a.step())
+        settle(w, bus, 200)
+        self.assertEqual(moves(w)[-1], (100, {1: 375}))
+        self.assertEqual(w.sim.position(1), 375)
+
     def test_stream_and_step_allocate_nothing(self):
         # The world's UART models allocate (they are Python): here the driver writes to the
         # fake UART of tests/test_alloc.py, which does not, on a clock the test steps.
@@ -554,6 +617,20 @@ class Sequences(Tidy):
         player.stop()
         self.assertFalse(player.step())
         self.assertEqual([m[0] for m in moves(w)][:3], [400, 250, 150])
+
+    def test_a_new_player_stops_the_one_playing(self):
+        w, bus = world()
+        a = arm(bus)
+        first = bm.Sequence(self.POSES).play(a)
+        self.assertTrue(first.step())
+        second = bm.Sequence([({"base": 0}, 100)]).play(a)
+        self.assertTrue(first.done)
+        self.assertIs(a.player, second)
+        settle(w, bus, 900)  # the first's next pose is due
+        self.assertFalse(first.step())
+        self.assertTrue(second.step())
+        settle(w, bus, 200)
+        self.assertEqual(moves(w)[-1], (100, {1: 500}))
 
     def test_await_player_plays_to_the_end_under_asyncio(self):
         class SimAsyncio:  # sleeping moves the world's clock, then the other tasks run

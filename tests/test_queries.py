@@ -53,6 +53,16 @@ class Queries(unittest.TestCase):
         self.assertEqual(self.bus.read_positions([1, 2, 3, 4, 5, 6]), ALL_500)
         self.assertEqual(self.bus.positions[9], 321)
 
+    def test_a_reply_in_time_with_other_ids_is_not_the_answer(self):
+        # Asked for servos 1 and 2, the controller answers with 3 and 4 (another task's
+        # request, say): the query waits on for its own, and times out; the reply is an event.
+        read_1_2 = bytes((0x55, 0x55, 0x05, 0x15, 0x02, 0x01, 0x02))
+        positions_3_4 = bytes((0x55, 0x55, 0x09, 0x15, 0x02, 0x03, 0xF4, 0x01, 0x04, 0xF4, 0x01))
+        self.uart.reply(read_1_2, positions_3_4)
+        self.assertTrue(timed_out(lambda: self.bus.read_positions([1, 2])))
+        self.assertEqual(self.bus.poll(), CMD_MULT_SERVO_POS_READ)
+        self.assertEqual(self.bus.positions, {3: 500, 4: 500})
+
     def test_a_reply_that_takes_its_time(self):
         self.uart.chunks = [1]
         self.uart.reply(GET_BATTERY, BATTERY_7500, delay_ms=30)

@@ -20,6 +20,7 @@ from busservo import (
 from test_queries import timed_out
 
 BATTERY_7500 = bytes((0x55, 0x55, 0x04, 0x0F, 0x4C, 0x1D))
+BATTERY_7100 = bytes((0x55, 0x55, 0x04, 0x0F, 0xBC, 0x1B))
 STOP = bytes((0x55, 0x55, 0x02, 0x07))
 
 
@@ -345,6 +346,62 @@ class Wire(unittest.TestCase):
         requests = [f for f in w.frames() if f[3] == CMD_GET_BATTERY_VOLTAGE]
         self.assertEqual((len(requests), w.garbled, w.sim.beeps), (3, 0, 0))
 
+    def test_a_cut_positions_request_finished_by_the_next_command_is_answered(self):
+        # Its reply is a positions event, not noise: the request was counted once finished.
+        w = wire.World("rp2")
+        busservo.time = w.clock
+        bus = busservo.BusServo(w.uart)
+        w.uart.stall(True)  # as above: 3 bytes of room left
+        bus.unload(list(range(1, 11)))
+        for _ in range(27):
+            bus.move(1, 500, 0)
+        try:
+            bus.request_positions([1, 2])  # 3 of its 7 bytes go
+            error = None
+        except OSError as e:
+            error = e.args[0]
+        self.assertEqual(error, errno.EIO)
+        w.uart.stall(False)
+        settle(w, bus, 400)
+        bus.set_group_speed(1, 100)  # sends the cut request's rest first
+        self.assertEqual(settle(w, bus, 100), [CMD_MULT_SERVO_POS_READ])
+        self.assertEqual((bus.positions, bus.noise, w.garbled), ({1: 500, 2: 500}, 0, 0))
+
+    def test_the_longest_reply_handed_over_120_bytes_at_a_time_is_read_whole(self):
+        # An esp32 UART made with timeout_char > 0 keeps ESP-IDF's RX threshold of 120
+        # bytes: the 257-byte reply to 84 ids comes in parts 125 ms apart. The quiet
+        # between them is no cut frame: its missing bytes are still on the wire.
+        w = wire.World("esp32", timeout_char=10)
+        busservo.time = w.clock
+        bus = busservo.BusServo(w.uart)
+        ids = list(range(1, 85))
+        self.assertEqual(bus.read_positions(ids), {i: 500 for i in ids})
+        bus.request_positions(ids)  # and through poll()
+        self.assertEqual(settle(w, bus, 400), [CMD_MULT_SERVO_POS_READ])
+        self.assertEqual(bus.noise, 0)
+
+    def test_a_late_reply_read_together_with_the_answer_is_not_taken_for_it(self):
+        # The reply to a request given up on ends just after the query's own request has
+        # gone, too soon to answer it, and the answer comes right behind it; one read
+        # brings the two. The first came before that read by the answer's 6 bytes: it is
+        # not the answer, though it was read after the answer could have come.
+        for port, w, bus in ports():
+            w.sim.silent = True  # the replies are written here, when they must come
+            bus.request_battery()
+            w.clock.advance_ms(10)
+            query = bus.ask(None, 50)  # gives up on that reply after 150 ms, then asks
+            for ms in range(200):
+                next(query)
+                if bus.wire_ms():  # its request is on the wire
+                    break
+                if ms == 147:  # the late reply, from 3 ms before that, and the answer
+                    w.noise(BATTERY_7100 + BATTERY_7500)
+                w.clock.advance_ms(1)
+            w.clock.advance_ms(11)  # both in (12.5 ms of line), unread
+            for _ in query:
+                pass
+            self.assertEqual(bus.battery, 7500, port)
+
     def test_a_position_reply_with_other_ids_is_an_event(self):
         for port, w, bus in ports():
             w.noise(b"\x55\x55\x06\x15\x01\x07\xf4\x01")  # servo 7, unasked
@@ -378,6 +435,18 @@ class Wire(unittest.TestCase):
             more = bus.wire_ms() - ahead
             self.assertTrue(0 <= more <= 2, (port, bus.wire_ms(), ahead))
             self.assertEqual(bus.read_battery(), 7500, port)
+
+    def test_back_to_back_moves_are_all_counted_and_a_query_behind_them_waits(self):
+        # move() counts its bytes inline, not through _sent(). Read as an idle wire, a busy
+        # one once left wire_ms() 10 ms behind 20 moves, and the query timed out.
+        for port, w, bus in ports():
+            for start in (0, 50):  # at once, then after the wire has been idle
+                w.clock.advance_ms(start)
+                for i in range(20):
+                    bus.move(1 + i % 6, 500, 0)  # 200 bytes: 208 ms of wire
+                ahead = bus.wire_ms() - w.tx_backlog_us() // 1000
+                self.assertTrue(0 <= ahead <= 2, (port, start, ahead))
+                self.assertEqual(bus.read_battery(), 7500, (port, start))
 
     def test_wire_ms_counts_10_bits_a_byte(self):
         for port, w, bus in ports():

@@ -14,7 +14,13 @@ import busservo
 import busservo_motion as bm
 import busservo_web
 import web_world
-from busservo import CMD_ACTION_GROUP_STOP, CMD_MULT_SERVO_UNLOAD, CMD_SERVO_MOVE
+import wire
+from busservo import (
+    CMD_ACTION_GROUP_STOP,
+    CMD_MULT_SERVO_POS_READ,
+    CMD_MULT_SERVO_UNLOAD,
+    CMD_SERVO_MOVE,
+)
 from shell import free_port, scratch, sh
 from web_world import http, login
 
@@ -397,6 +403,21 @@ class BadInput(Tidy):
             status, reply = await http(port, "GET", "/api/state", token=token)
             self.assertEqual(status, 200)  # still serving
             self.assertTrue(reply["armed"])
+
+        run(scenario)
+
+    def test_remove_past_the_last_step_or_play_over_10x_gets_400_and_changes_nothing(self):
+        async def scenario(port, world, robot):
+            token = await login(port)
+            _panels[-1].sequence.append({"base": 10}, 300)  # a step, with no read
+            status, reply = await http(port, "POST", "/api/remove", {"index": 1}, token)
+            self.assertEqual(status, 400, reply)
+            self.assertEqual(reply["error"], "index must be in 0..0, got 1")
+            status, reply = await http(port, "POST", "/api/play", {"speed": 10.5}, token)
+            self.assertEqual(status, 400, reply)
+            self.assertEqual(reply["error"], "speed must be in 0.1..10, got 10.5")
+            status, reply = await http(port, "GET", "/api/state", token=token)
+            self.assertEqual((reply["steps"], reply["playing"]), ([300], None))
 
         run(scenario)
 
@@ -1035,3 +1056,134 @@ async def answered(reader, writer, raw, start=None):
     ms = time.ticks_diff(time.ticks_ms(), start)
     await writer.aclose()
     return line, ms
+
+
+class Loop(Tidy):
+    # The panel's loop (Panel._tick() and run()), driven by hand on the stepped clock of
+    # the wire world (tests/wire.py): what it sends is the same on every run, however
+    # loaded the machine.
+    def tearDown(self):
+        busservo_web.time = time
+        Tidy.tearDown(self)
+
+    def panel(self, dps=None):
+        """(world, panel, token): a panel on a fresh world with the arm of web_world (its
+        base slowed to dps), armed by token's page as /api/arm arms it."""
+        w = wire.World("rp2")
+        robot = web_world.robot(w)
+        if dps:
+            robot = bm.Robot(robot.bus, {"base": bm.Joint(1, dps=dps)})
+        busservo_web.time = w.clock
+        panel = busservo_web.Panel(robot, PASSWORD)
+        token = panel._login(PASSWORD)
+        robot.hold()
+        robot.where()
+        panel.armed = token
+        return w, panel, token
+
+    def tick(self, w, panel, token, ms, alive=True):
+        """ms of the panel's loop, a tick every 10 ms; with alive, the page of token is
+        heard before each tick (it polls)."""
+        for _ in range(ms // 10):
+            for session in panel._sessions:
+                if alive and session[0] == token:
+                    session[1] = panel._seen = w.clock.ticks_ms()
+            panel._tick()
+            w.clock.advance_ms(10)
+
+    def test_only_the_page_that_armed_is_told_it_drives(self):
+        w, panel, token = self.panel()
+        other = panel._login(PASSWORD)
+        mine = [panel.state(t)["mine"] for t in (token, other, None)]
+        self.assertEqual(mine, [True, False, False])
+        self.assertTrue(panel.state(other)["armed"])
+
+    def test_a_sequence_that_has_ended_lets_the_sliders_drive_again(self):
+        w, panel, token = self.panel()
+        panel.sequence.append({"base": 10}, 100)
+        panel._play(token, 1.0, False)
+        self.tick(w, panel, token, 300)
+        self.assertEqual(panel.state(token)["playing"], None)
+        panel._target(token, {"base": 20})  # not 409: "a sequence is playing"
+        self.tick(w, panel, token, 500)  # the stream's first frame glides for its pace
+        self.assertEqual(w.sim.position(1), panel.robot.joints["base"].position(20))
+
+    def test_a_slider_drag_during_playback_is_refused_and_sends_nothing(self):
+        w, panel, token = self.panel()
+        panel.sequence.append({"base": 10}, 2000)
+        panel._play(token, 1.0, False)
+        self.tick(w, panel, token, 100)
+        with self.assertRaises(busservo_web._Refused):
+            panel._target(token, {"base": -30})
+        self.tick(w, panel, token, 200)
+        self.assertEqual(panel.robot.updates, 0)  # the stream sent no frame
+
+    def test_the_dead_man_stops_a_slow_joint_on_its_way_at_once(self):
+        # The base at 30 degrees/s streams towards 90 for 3 s. The page goes silent: on
+        # the tick that disarms, and after it, no frame of the stream goes.
+        w, panel, token = self.panel(dps=30)
+        panel._target(token, {"base": 90})
+        self.tick(w, panel, token, 500)
+        self.assertTrue(panel.robot.updates > 30)
+        for _ in range(150):
+            sent = panel.robot.updates
+            self.tick(w, panel, token, 10, alive=False)
+            if panel.armed is None:
+                break
+        self.assertEqual((panel.armed, panel.robot.updates), (None, sent))
+        self.tick(w, panel, token, 500, alive=False)
+        self.assertEqual(panel.robot.updates, sent)
+        self.assertTrue(w.sim.position(1) < panel.robot.joints["base"].position(45))
+
+    def test_estop_mid_sequence_lets_every_joint_go_when_the_controller_does_not_answer(self):
+        w, panel, token = self.panel()
+        panel.sequence.append({"base": 40}, 20000)
+        panel._play(token, 1.0, False)
+        self.tick(w, panel, token, 200)
+        w.sim.silent = True  # it obeys, but answers no query: the stop must not read first
+        panel.estop()
+        self.tick(w, panel, token, 50)
+        self.assertEqual(w.sim.limp, {1, 2, 3, 4})
+        self.assertEqual((panel.player, panel.armed, panel.limp), (None, None, True))
+
+    def test_a_failure_in_the_loop_stops_the_sequence_and_is_shown(self):
+        w, panel, token = self.panel()
+        panel.sequence.append({"base": 40}, 20000)
+        panel._play(token, 1.0, False)
+        self.tick(w, panel, token, 200)
+        w.uart.fail("any", OSError(5))  # the next tick's poll() raises
+
+        class OnTheWorldsClock:  # asyncio, whose sleeps move the world's clock
+            Lock = asyncio.Lock
+            create_task = staticmethod(asyncio.create_task)
+            sleep_ms = staticmethod(w.async_sleep_ms)
+
+        async def main():
+            task = asyncio.create_task(panel.run())
+            await asyncio.sleep_ms(0)  # one tick: it fails, and the panel goes on
+            task.cancel()
+            await panel._halting  # the halt: where the joints are read, then sent there
+
+        busservo_web.asyncio = OnTheWorldsClock
+        try:
+            asyncio.run(main())
+        finally:
+            busservo_web.asyncio = asyncio
+        self.assertEqual(panel.player, None)
+        self.assertIn("OSError", panel.error)
+        self.tick(w, panel, token, 50)
+        halt = [f for f in w.frames() if f[3] == CMD_SERVO_MOVE][-1]
+        self.assertEqual(halt[5] | halt[6] << 8, busservo_web._HALT_MS)
+
+    def test_no_position_read_goes_out_while_a_drag_streams(self):
+        # The stream comes first: the panel reads positions only when the wire is free.
+        w, panel, token = self.panel()
+        before = len(w.frames())
+        for i in range(100):  # a drag for 1 s: a new target every tick
+            panel._target(token, {"base": i % 40})
+            self.tick(w, panel, token, 10)
+        during = [f[3] for f in w.frames()[before:]]
+        self.assertTrue(panel.robot.updates > 80, panel.robot.updates)
+        self.assertFalse(CMD_MULT_SERVO_POS_READ in during)
+        self.tick(w, panel, token, 300)  # the drag is over: the page's positions are read
+        self.assertIn(CMD_MULT_SERVO_POS_READ, [f[3] for f in w.frames()[before:]])
