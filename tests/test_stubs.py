@@ -7,13 +7,22 @@
 import unittest
 
 import busservo
+import busservo_arm
 import busservo_async
 import busservo_board
 import busservo_motion
 import busservo_sim
 import busservo_web
 
-MODULES = (busservo, busservo_async, busservo_board, busservo_sim, busservo_motion, busservo_web)
+MODULES = (
+    busservo,
+    busservo_async,
+    busservo_board,
+    busservo_sim,
+    busservo_motion,
+    busservo_web,
+    busservo_arm,
+)
 
 # AsyncBusServo.__getattr__ forwards to its BusServo: its stub declares what it forwards, with
 # the signatures of BusServo's methods. {class: (the module, the class it forwards to)}
@@ -33,6 +42,10 @@ def instances():
     bus = busservo.BusServo(sim)
     robot = busservo_motion.Robot(bus, {"base": busservo_motion.Joint(1)})
     sequence = busservo_motion.Sequence([({"base": 10}, 100)])
+    joints = {name: busservo_motion.Joint(i + 1) for i, name in enumerate(busservo_arm.JOINTS)}
+    links = {"base_height": 70, "upper_arm": 105, "forearm": 98, "hand": 150}
+    arm = busservo_arm.Arm(busservo_motion.Robot(bus, joints), links)
+    arm.move_to(100, 0, 50, ms=0)  # known: the line reads nothing
     return {
         "BusServo": bus,
         "AsyncBusServo": busservo_async.AsyncBusServo(bus),
@@ -42,6 +55,8 @@ def instances():
         "Sequence": sequence,
         "Player": sequence.play(robot),
         "Panel": busservo_web.Panel(robot, "a password"),
+        "Arm": arm,
+        "Line": arm.line_to(120, 0, 50),
     }
 
 

@@ -1,0 +1,553 @@
+# busservo_arm: a desktop arm in millimetres, on busservo_motion.Robot.
+#
+#   import busservo_arm
+#   arm = busservo_arm.Arm(robot, {"base_height": 70, "upper_arm": 105, "forearm": 98,
+#                                  "hand": 150})
+#   arm.move_to(150, 0, 40, ms=1000)     # the tool point to x, y, z mm, the hand down
+#   arm.where()                          # (x, y, z, pitch), read now
+#   line = arm.line_to(120, 80, 30, mm_s=50)   # line.step() from a loop, or await line
+#
+# The geometry (docs/arm.md has the picture): a base that turns, then a shoulder, an elbow and
+# a wrist that tilt in one vertical plane. x is forward when the base is at 0, y to the left,
+# z up, the origin on the base's axis at the table. base positive turns counter-clockwise seen
+# from above. shoulder 0 holds the upper arm vertical; shoulder, elbow and wrist positive all
+# tilt forward and down; elbow 0 and wrist 0 are straight in line with the link before. pitch
+# is the hand's angle from the horizontal: 0 straight out, -90 straight down. The joints'
+# degrees are busservo_motion's: calibrate each joint's direction and trim to these.
+#
+# Floats are heap objects on most ports: a solve allocates. The line's step() solves only
+# when the wire can take a frame, and streams through one dict made in Arm().
+import json
+import math
+import time
+
+import busservo_motion
+
+CALIBRATION = "robot.json"  # busservo_board.CALIBRATION: the joints, and the links beside them
+JOINTS = ("base", "shoulder", "elbow", "wrist")
+LINKS = ("base_height", "upper_arm", "forearm", "hand")
+
+_RAD = math.pi / 180
+_DEG = 180 / math.pi
+_MS_MAX = 65535  # a move's time on the wire: 16 bits
+_SCAN = 2  # degrees between the pitches tried when none is given
+_HALVE = 6  # then halved this often: to 1/32 degree
+_HAIR = 0.001  # degrees inside the reach's edge
+_CHECK_MM = 2  # a line is checked every this many mm (and degrees of pitch)
+_CHECKS_MAX = 500
+_DPS = 0.9  # a line plans a joint's speed at most this share of its dps
+_LATE_MS = 100  # a line's time moves on at most this much an update: a late loop slows it
+_INF = float("inf")
+
+_asyncio = None  # imported by the first Line.run(): many arms never need it
+_type = type
+_int = int
+_float = float
+
+
+def _number(name, value, low=-_INF, high=_INF):
+    # A finite int or float in low..high, or raise naming it, the range and what came.
+    t = _type(value)
+    if t is not _int and t is not _float:
+        raise TypeError("%s must be a number, got %r" % (name, value))
+    if not low <= value <= high or not -_INF < value < _INF:
+        if low == -_INF and high == _INF:
+            raise ValueError("%s must be a finite number, got %r" % (name, value))
+        raise ValueError("%s must be in %s..%s, got %r" % (name, low, high, value))
+    return value
+
+
+def _wrap(degrees):
+    # The same angle in -180..180.
+    while degrees > 180:
+        degrees -= 360
+    while degrees <= -180:
+        degrees += 360
+    return degrees
+
+
+def _read(path, key):
+    # config (a dict) and config[key] of the JSON file at path, or ValueError naming the file.
+    with open(path) as f:
+        try:
+            config = json.load(f)
+        except ValueError as e:
+            raise ValueError("%s: not valid JSON (%s)" % (path, e))
+    if _type(config) is not dict or key not in config:
+        raise ValueError("%s: no %r in it, as Arm.save() writes" % (path, key))
+    return config[key]
+
+
+class Arm:
+    def __init__(self, robot, links, elbow_up=True):
+        if not isinstance(robot, busservo_motion.Robot):
+            raise TypeError("robot must be a busservo_motion.Robot, got %r" % (robot,))
+        missing = [name for name in JOINTS if name not in robot.joints]
+        if missing:
+            raise ValueError(
+                "an arm needs joints %s: no %s among %s"
+                % (", ".join(JOINTS), ", ".join(missing), ", ".join(robot.names))
+            )
+        if _type(links) is not dict:
+            raise TypeError("links must be a dict {name: mm}, got %r" % (links,))
+        for name in links:
+            if name not in LINKS:
+                raise ValueError("links: no link %r: the links are %s" % (name, ", ".join(LINKS)))
+        for name in LINKS:
+            if name not in links:
+                raise ValueError(
+                    "links: %r is missing (the links are %s)" % (name, ", ".join(LINKS))
+                )
+            _number("links[%r]" % name, links[name], 0)
+        for name in ("upper_arm", "forearm"):
+            if not links[name]:
+                raise ValueError("links[%r] must be more than 0 mm, got 0" % name)
+        self.robot = robot
+        self.links = {name: links[name] for name in LINKS}
+        self.elbow_up = bool(elbow_up)
+        self._b = float(links["base_height"])
+        self._u = float(links["upper_arm"])
+        self._f = float(links["forearm"])
+        self._h = float(links["hand"])
+        self._joints = [robot.joints[name] for name in JOINTS]
+        self._at = None  # [base, shoulder, elbow, wrist]: degrees last sent or read
+        self._pose = {name: 0.0 for name in JOINTS}  # what a line streams, made once
+        # A solve's result: the plane's angles, or why not (a joint's index, or -1 for the
+        # reach, the value, how far beyond, and the limits it is beyond).
+        self._s = self._e = self._w = 0.0
+        self._why = None
+        self._worst = None  # the least bad failure of a scan of pitches, and its pitch
+        self._why_pitch = 0
+
+    # Calibration.
+
+    @staticmethod
+    def load(bus_or_robot, path=CALIBRATION, elbow_up=True):
+        """The Arm whose links save() wrote to path, on a Robot of the joints saved there (on
+        bus), or on the robot given."""
+        robot = bus_or_robot
+        if not isinstance(robot, busservo_motion.Robot):
+            robot = busservo_motion.Robot.load(bus_or_robot, path)
+        links = _read(path, "links")
+        if _type(links) is not dict:
+            raise ValueError("%s: links must be {name: mm}, got %r" % (path, links))
+        try:
+            return Arm(robot, links, elbow_up)
+        except (TypeError, ValueError) as e:
+            raise ValueError("%s: %s" % (path, e))
+
+    def save(self, path=CALIBRATION):
+        """Write the joints' calibration and the links to path as JSON, keeping what else the
+        file holds (Robot.load() and Arm.load() read it)."""
+        config = {}
+        try:
+            with open(path) as f:
+                config = json.load(f)
+        except (OSError, ValueError):
+            pass
+        if _type(config) is not dict:
+            config = {}
+        robot = self.robot
+        config["joints"] = {name: robot.joints[name].config() for name in robot.names}
+        config["links"] = dict(self.links)
+        with open(path, "w") as f:
+            json.dump(config, f)
+
+    # The geometry.
+
+    def point(self, pose):
+        """(x, y, z, pitch) of the tool point at pose {name: degrees} (the four joints'):
+        the forward kinematics."""
+        for name in JOINTS:
+            if name not in pose:
+                raise ValueError("pose has no %r: it needs %s" % (name, ", ".join(JOINTS)))
+            _number("pose[%r]" % name, pose[name])
+        return self._point(pose["base"], pose["shoulder"], pose["elbow"], pose["wrist"])
+
+    def _point(self, base, shoulder, elbow, wrist):
+        a = shoulder * _RAD
+        b = a + elbow * _RAD
+        c = b + wrist * _RAD
+        r = self._u * math.sin(a) + self._f * math.sin(b) + self._h * math.sin(c)
+        z = self._b + self._u * math.cos(a) + self._f * math.cos(b) + self._h * math.cos(c)
+        base *= _RAD
+        return r * math.cos(base), r * math.sin(base), z, _wrap(90 - c * _DEG)
+
+    def pose(self, x, y, z, pitch=None):
+        """{name: degrees} of the four joints that put the tool point at x, y, z mm with the
+        hand at pitch degrees (None: the reachable pitch nearest -90): the inverse
+        kinematics. Raises ValueError naming the point, the reach and the limiting joint."""
+        _number("x", x)
+        _number("y", y)
+        _number("z", z)
+        if pitch is not None:
+            _number("pitch", pitch)
+        base = self._base(x, y, z)
+        r = math.sqrt(x * x + y * y)
+        zz = z - self._b
+        if pitch is None:
+            pitch = self._pitch(r, zz)
+            if pitch is None:
+                raise ValueError(self._refusal(x, y, z, None))
+        elif not self._plane(r, zz, pitch, True):
+            raise ValueError(self._refusal(x, y, z, pitch))
+        return {"base": base, "shoulder": self._s, "elbow": self._e, "wrist": self._w}
+
+    def _base(self, x, y, z):
+        # The base's angle towards x, y (checked), or where it is if x, y is on its axis.
+        if x or y:
+            base = math.atan2(y, x) * _DEG
+        else:
+            base = self._at[0] if self._at else 0.0
+        joint = self._joints[0]
+        if not joint.lo <= base <= joint.hi:
+            raise ValueError(
+                "(x, y, z) = (%.1f, %.1f, %.1f) mm: the base would be at %.1f degrees, beyond its"
+                " limits %.1f..%.1f" % (x, y, z, base, joint.lo, joint.hi)
+            )
+        return base
+
+    def _plane(self, r, zz, pitch, strict):
+        # Solve in the arm's plane for the tool point r mm out from the base's axis, zz mm
+        # above the shoulder's, at pitch: self._s, _e, _w, and True; or False, and why in
+        # self._why. Not strict (a line's step): past the reach or a limit, the nearest
+        # (the robot clamps to the limits, and counts).
+        p = pitch * _RAD
+        wr = r - self._h * math.cos(p)
+        wz = zz - self._h * math.sin(p)
+        u = self._u
+        f = self._f
+        d2 = wr * wr + wz * wz
+        c = (d2 - u * u - f * f) / (2 * u * f)
+        if c > 1 or c < -1:
+            if strict:
+                d = math.sqrt(d2)
+                if c > 1:
+                    self._why = (-1, d, d - u - f, u + f)
+                else:
+                    self._why = (-1, d, abs(u - f) - d, abs(u - f))
+                return False
+            c = 1.0 if c > 1 else -1.0
+        e = math.acos(c)
+        if not self.elbow_up:
+            e = -e
+        s = math.atan2(wr, wz) - math.atan2(f * math.sin(e), u + f * math.cos(e))
+        self._s = s = _wrap(s * _DEG)
+        self._e = e = e * _DEG
+        self._w = w = _wrap(90 - pitch - s - e)
+        if strict:
+            joints = self._joints
+            for i, value in ((1, s), (2, e), (3, w)):
+                joint = joints[i]
+                if not joint.lo <= value <= joint.hi:
+                    beyond = joint.lo - value if value < joint.lo else value - joint.hi
+                    self._why = (i, value, beyond, joint)
+                    return False
+        return True
+
+    def _pitch(self, r, zz):
+        # The pitch nearest -90 at which the plane's solve succeeds (self._s, _e, _w are its
+        # angles), or None, with the least bad failure in self._why and its pitch in
+        # self._why_pitch.
+        self._worst = None
+        if self._tried(r, zz, -90):
+            return -90
+        # The wrist is the hand's length back from the tool point: how far it is from the
+        # shoulder's axis depends on the pitch's angle from phi, the tool point's direction
+        # from that axis. It is in reach where that angle is lo..hi degrees either way.
+        h = self._h
+        d = math.sqrt(r * r + zz * zz)
+        phi = -90.0
+        lo = 0.0
+        hi = 180.0
+        if h * d > 1e-9:
+            phi = math.atan2(zz, r) * _DEG
+            far = self._u + self._f
+            near = abs(self._u - self._f)
+            cos_hi = (d * d + h * h - far * far) / (2 * h * d)
+            cos_lo = (d * d + h * h - near * near) / (2 * h * d)
+            if cos_hi > 1 or cos_lo < -1:  # at no pitch: say so where it comes nearest
+                self._tried(r, zz, phi if cos_hi > 1 else _wrap(phi + 180))
+                self._why, self._why_pitch = self._worst
+                return None
+            if cos_hi > -1:
+                hi = math.acos(cos_hi) * _DEG
+            if cos_lo < 1:
+                lo = math.acos(cos_lo) * _DEG
+            # -90 failed: if it is out of reach, the edge of the reach nearest it (a hair
+            # inside) is the answer, unless a joint's limit is in the way there too.
+            off = _wrap(-90 - phi)
+            edge = None
+            if abs(off) > hi:
+                edge = hi - _HAIR
+            elif abs(off) < lo:
+                edge = lo + _HAIR
+            if edge is not None:
+                pitch = phi + edge if off > 0 else phi - edge
+                if self._tried(r, zz, pitch):
+                    return pitch
+        # A joint's limit is in the way: try pitches further and further from -90, within
+        # the reach, then halve the step back towards -90 to find the limit's edge.
+        found = None
+        k = _SCAN
+        while k <= 180 and found is None:
+            for pitch in (-90 - k, -90 + k):
+                if not lo <= abs(_wrap(pitch - phi)) <= hi:
+                    continue
+                if self._tried(r, zz, pitch):
+                    good = pitch
+                    bad = pitch + _SCAN if pitch < -90 else pitch - _SCAN
+                    for _ in range(_HALVE):
+                        mid = (good + bad) / 2
+                        if self._tried(r, zz, mid):
+                            good = mid
+                        else:
+                            bad = mid
+                    if found is None or abs(good + 90) < abs(found + 90):
+                        found = good
+            k += _SCAN
+        if found is None:
+            if self._worst is None:  # none tried: the reach is narrower than the steps
+                self._tried(r, zz, phi)
+            self._why, self._why_pitch = self._worst
+            return None
+        self._plane(r, zz, found, True)
+        return found
+
+    def _tried(self, r, zz, pitch):
+        # _plane(), strict, keeping the least bad failure seen.
+        if self._plane(r, zz, pitch, True):
+            return True
+        if self._worst is None or self._why[2] < self._worst[0][2]:
+            self._worst = (self._why, pitch)
+        return False
+
+    def _refusal(self, x, y, z, pitch):
+        # The message of a point refused: the point, the reach, the limiting joint.
+        where = "(x, y, z) = (%.1f, %.1f, %.1f) mm" % (x, y, z)
+        if pitch is None:
+            pitch = self._why_pitch
+            where += ": no pitch reaches it within the limits; the nearest, pitch %.1f" % pitch
+        else:
+            where += ", pitch %.1f" % pitch
+        i, value, beyond, limit = self._why
+        if i < 0:
+            if value > limit:
+                return (
+                    "%s: out of reach: the wrist would be %.1f mm from the shoulder's axis, and"
+                    " the elbow straight reaches %.1f mm" % (where, value, limit)
+                )
+            return (
+                "%s: out of reach: the wrist would be %.1f mm from the shoulder's axis, and"
+                " the elbow folded reaches no closer than %.1f mm" % (where, value, limit)
+            )
+        return "%s: the %s would be at %.1f degrees, beyond its limits %.1f..%.1f" % (
+            where,
+            JOINTS[i],
+            value,
+            limit.lo,
+            limit.hi,
+        )
+
+    # Moves.
+
+    def move_to(self, x, y, z, pitch=None, ms=None, mm_s=None):
+        """Move the tool point to x, y, z mm with the hand at pitch (None: the reachable
+        pitch nearest -90), in one frame for the four joints: within ms, or at mm_s for the
+        tool point and the wrist (from where the arm last went, read first if not known).
+        Return the move's ms."""
+        if (ms is None) == (mm_s is None):
+            raise ValueError(
+                "give move_to() ms or mm_s (not both), got ms=%r mm_s=%r" % (ms, mm_s)
+            )
+        if ms is not None:
+            if _type(ms) is not _int:
+                raise TypeError("ms must be an int in 0..%d ms, got %r" % (_MS_MAX, ms))
+            if not 0 <= ms <= _MS_MAX:
+                raise ValueError("ms must be in 0..%d ms, got %r" % (_MS_MAX, ms))
+        else:
+            _number("mm_s", mm_s, 0)
+            if not mm_s:
+                raise ValueError("mm_s must be more than 0 mm/s, got %r" % (mm_s,))
+        pose = self.pose(x, y, z, pitch)
+        if mm_s is not None:
+            ms = math.ceil(self._distance(pose) * 1000 / mm_s - 1e-6)  # (float error)
+            if ms > _MS_MAX:
+                raise ValueError(
+                    "the move would take %d ms, more than %d: move in steps, or faster"
+                    % (ms, _MS_MAX)
+                )
+        robot = self.robot
+        if robot.player:
+            robot.player.stop()
+        took = robot.move(pose, ms=ms)
+        self._at = [pose[name] for name in JOINTS]
+        return took
+
+    def _known(self):
+        # The joints' degrees last sent or read; read now if none.
+        if self._at is None:
+            self.where()
+        return self._at
+
+    def _distance(self, pose):
+        # How far the tool point and the wrist go, from where the arm is to pose: the more.
+        at = self._known()
+        x0, y0, z0, p0 = self._point(at[0], at[1], at[2], at[3])
+        x1, y1, z1, p1 = self._point(pose["base"], pose["shoulder"], pose["elbow"], pose["wrist"])
+        h = self._h
+        tool = math.sqrt((x1 - x0) ** 2 + (y1 - y0) ** 2 + (z1 - z0) ** 2)
+        # The wrist is the hand's length back from the tool point, along the hand.
+        b0 = at[0] * _RAD
+        b1 = pose["base"] * _RAD
+        q0 = math.cos(p0 * _RAD)
+        q1 = math.cos(p1 * _RAD)
+        dx = (x1 - h * q1 * math.cos(b1)) - (x0 - h * q0 * math.cos(b0))
+        dy = (y1 - h * q1 * math.sin(b1)) - (y0 - h * q0 * math.sin(b0))
+        dz = (z1 - h * math.sin(p1 * _RAD)) - (z0 - h * math.sin(p0 * _RAD))
+        return max(tool, math.sqrt(dx * dx + dy * dy + dz * dz))
+
+    def where(self):
+        """(x, y, z, pitch) of the tool point, from the joints' positions read now (a
+        blocking query), to 0.1 mm and 0.1 degree."""
+        got = self.robot.where(JOINTS)
+        self._at = [got[name] for name in JOINTS]
+        x, y, z, pitch = self._point(*self._at)
+        return round(x, 1), round(y, 1), round(z, 1), round(pitch, 1)
+
+    def line_to(self, x, y, z, pitch=None, mm_s=50):
+        """A Line: the tool point along a straight line from where the arm last went (read
+        first if not known) to x, y, z mm, at mm_s, the pitch turning evenly to pitch (None:
+        the reachable pitch nearest -90 at the end). The whole line is checked first: a
+        point on it the arm cannot reach raises ValueError naming it, and nothing is sent.
+        Call the Line's step() from a loop, or await it."""
+        return Line(self, x, y, z, pitch, mm_s)
+
+
+class Line:
+    def __init__(self, arm, x, y, z, pitch=None, mm_s=50):
+        _number("mm_s", mm_s, 0)
+        if not mm_s:
+            raise ValueError("mm_s must be more than 0 mm/s, got %r" % (mm_s,))
+        end = arm.pose(x, y, z, pitch)  # checks x, y, z and pitch
+        at = arm._known()
+        x0, y0, z0, p0 = arm._point(at[0], at[1], at[2], at[3])
+        p1 = pitch
+        if p1 is None:
+            p1 = _wrap(90 - end["shoulder"] - end["elbow"] - end["wrist"])
+        self.arm = arm
+        self.robot = arm.robot
+        self.start = (x0, y0, z0, p0)
+        self.end = (x, y, z, p1)
+        self.mm_s = mm_s
+        # Check the line every _CHECK_MM (mm, and degrees of pitch), and time it: mm_s for
+        # the tool point and the wrist, and no joint faster than _DPS of its dps.
+        dx, dy, dz, dp = x - x0, y - y0, z - z0, _wrap(p1 - p0)  # the short way round
+        length = math.sqrt(dx * dx + dy * dy + dz * dz)
+        n = math.ceil(max(length, abs(dp), 1) / _CHECK_MM)
+        n = min(n, _CHECKS_MAX)
+        self.ms = arm._distance(end) * 1000 / mm_s
+        before = at
+        joints = arm._joints
+        for k in range(1, n + 1):
+            u = k / n
+            px, py, pz, pp = x0 + dx * u, y0 + dy * u, z0 + dz * u, p0 + dp * u
+            try:
+                pose = arm.pose(px, py, pz, pp)
+            except ValueError as e:
+                raise ValueError(
+                    "the line from (%.1f, %.1f, %.1f) to (%.1f, %.1f, %.1f) mm leaves the reach"
+                    " at %s" % (x0, y0, z0, x, y, z, e)
+                )
+            now = [pose[name] for name in JOINTS]
+            for i in range(4):
+                dps = joints[i].dps
+                if dps:  # with a margin: the robot's stream rounds to whole positions
+                    self.ms = max(self.ms, n * abs(now[i] - before[i]) * 1000 / (_DPS * dps))
+            before = now
+        self.ms = math.ceil(self.ms - 1e-6)
+        self.updates = 0  # frames of this line sent
+        self.done = False
+        self._dx, self._dy, self._dz, self._dp = dx, dy, dz, dp
+        self._t = -1  # the line's time at the last target streamed, in ms (-1: none yet)
+        self._sent = 0  # ticks_ms then
+        self._stepped = time.ticks_ms()
+        arm._pose["base"] = at[0]  # kept while the line runs along the base's axis
+        robot = self.robot
+        if robot.player:
+            robot.player.stop()
+        robot.player = self  # robot.estop() stops it
+
+    def step(self):
+        """From the control loop: if the wire can take a frame, stream the point the line
+        has reached (solved now) and send it with robot.step(). Never waits; solves nothing
+        while the wire is busy. True if it sent."""
+        if self.done:
+            return False
+        robot = self.robot
+        now = time.ticks_ms()
+        since = time.ticks_diff(now, self._stepped)
+        self._stepped = now
+        frame = robot.frame_ms or 20  # a 4-servo frame at 9600 baud, until measured
+        if robot.bus.wire_ms() > (since if since < frame else frame):
+            return False
+        # The line's time: a frame ahead at first, then as the clock goes, but at most
+        # _LATE_MS an update (a late loop slows the line, rather than cutting across).
+        t = self._t
+        if t < 0:
+            t = frame
+        else:
+            dt = time.ticks_diff(now, self._sent)
+            t += dt if dt < _LATE_MS else _LATE_MS
+        u = t / self.ms if self.ms and t < self.ms else 1.0
+        arm = self.arm
+        x0, y0, z0, p0 = self.start
+        x = x0 + self._dx * u
+        y = y0 + self._dy * u
+        pose = arm._pose
+        if x or y:
+            pose["base"] = math.atan2(y, x) * _DEG
+        arm._plane(math.sqrt(x * x + y * y), z0 + self._dz * u - arm._b, p0 + self._dp * u, False)
+        pose["shoulder"] = arm._s
+        pose["elbow"] = arm._e
+        pose["wrist"] = arm._w
+        robot.stream(pose)
+        if not robot.step():
+            return False
+        self._t = t
+        self._sent = now
+        self.updates += 1
+        at = arm._at
+        for i in range(4):
+            at[i] = pose[JOINTS[i]]
+        if u >= 1:
+            self._end()
+        return True
+
+    def stop(self):
+        """End the line: the tool point stops at the last point sent. Nothing is sent, and
+        targets streamed but not yet sent are dropped (robot.hold())."""
+        if not self.done:
+            self._end()
+            self.robot.hold()
+
+    def _end(self):
+        self.done = True
+        if self.robot.player is self:
+            self.robot.player = None
+
+    async def run(self, poll_ms=5):
+        """Step to the end of the line, sleeping between frames: other tasks run meanwhile."""
+        global _asyncio
+        if _asyncio is None:
+            import asyncio as _asyncio
+        while not self.done:
+            self.step()
+            if not self.done:
+                wait = self.robot.bus.wire_ms()
+                await _asyncio.sleep_ms(min(poll_ms, wait) if wait else 1)
+
+    def __await__(self):
+        return self.run()
+
+    __iter__ = __await__
