@@ -212,7 +212,10 @@ class Robot:
         self._in = bytearray(n)  # 1: the joint is in the stream
         self._fresh = False  # targets not yet sent
         now = time.ticks_ms()
-        self._given = self._given_before = self._stepped = now
+        self._given = self._given_before = self._stepped = self._sent = now
+        self._ms = 0  # the move time of the last frame step() sent
+        self._slowing = False  # that frame slowed a joint to its dps
+        self._owed = [0] * n  # a slowed joint's way not yet taken, in 1/1000 positions
         self.frame_ms = 0  # a stream frame's time on the wire, in ms (0: none sent yet)
         self._frame_n = 0  # the joints in the frame it was measured on
         self.updates = 0  # stream frames sent
@@ -411,6 +414,8 @@ class Robot:
         self._stepped = now
         if not self._fresh:
             return False
+        if self._slowing and time.ticks_diff(now, self._sent) < self._ms:
+            return False  # a slowed joint is on its way: its next step once it is there
         live = self._live
         frame = self.frame_ms or 3 * len(live) + 8  # ms: at 9600 baud, until measured
         ahead = self.bus.wire_ms()
@@ -424,21 +429,45 @@ class Robot:
         at = self._at
         goal = self._goal
         joints = self._joints
+        owed = self._owed
+        # A slowed joint goes as far as its dps allows in the time since the last frame (no
+        # more than that frame's glide and the loop's period, or this one's ms: after a
+        # pause it starts afresh), the part of a position a frame cannot take carried to the
+        # next; the frame takes as long as its longest step needs at that dps (glide), and no
+        # frame goes before the servo is there (above). So a joint never turns faster than
+        # its dps, however fast step() runs and however fast the targets come.
+        elapsed = time.ticks_diff(now, self._sent)
+        cap = self._ms + since
+        if cap < ms:
+            cap = ms
+        if elapsed > cap:
+            elapsed = cap
+        glide = ms
         fresh = False
         for k in range(len(live)):
             i = self._live_i[k]
             position = goal[i]
             pps = joints[i]._pps
             if pps:  # no faster than the joint's dps: step towards the goal
-                most = pps * ms // 1000 or 1
+                owed[i] += pps * elapsed
+                most = owed[i] // 1000
                 if position > at[i] + most:
                     position = at[i] + most
                     fresh = True
                 elif position < at[i] - most:
                     position = at[i] - most
                     fresh = True
+                else:
+                    most = owed[i] = 0  # there: nothing owed
+                owed[i] -= most * 1000
+                most = (abs(position - at[i]) * 1000 + pps - 1) // pps  # ms at its dps
+                if most > glide:
+                    glide = most
             live[k][1] = position
-        self.bus.move_many(live, ms)
+        self.bus.move_many(live, glide)
+        self._sent = now
+        self._ms = glide
+        self._slowing = fresh
         for k in range(len(live)):
             at[self._live_i[k]] = live[k][1]
         if fresh:

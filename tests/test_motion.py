@@ -500,6 +500,27 @@ class Stream(Tidy):
         self.assertEqual(got[-1][1], {1: 875})  # and it got there, after 1.5 s
         self.assertTrue(robot.slowed > 0)
 
+    def test_a_joints_dps_holds_however_fast_step_runs_and_at_whatever_pace_targets_come(self):
+        # A slider dragged at 20 or 50 updates a second, step() called every ms: frames go
+        # whenever the wire is free. Once, each carried a step worth the stream's pace, so a
+        # joint of 30 degrees/s ran at 58 (at 20 ms) or more: its own servo, sampled every ms,
+        # must turn no faster than 30 degrees/s (125 positions/s) over any 200 ms, however the
+        # targets come: 25 positions, and 2 for the rounding to whole positions at each end.
+        for pace in (10, 20, 50, 100):
+            w, bus = world()
+            robot = bm.Robot(bus, {"j1": bm.Joint(1, dps=30)})
+            robot.where()
+            seen = []
+            for ms in range(1500):
+                if ms % pace == 0:
+                    robot.stream({"j1": 100})
+                robot.step()
+                settle(w, bus, 1)
+                seen.append(w.sim.position(1))
+            fastest = max(abs(seen[t + 200] - seen[t]) for t in range(len(seen) - 200))
+            self.assertTrue(fastest <= 25 + 2, (pace, fastest))
+            self.assertTrue(seen[-1] - seen[0] > 150, (pace, seen[-1]))  # and it went on
+
     def test_a_target_beyond_a_joints_dps_is_reached_in_steps_down_and_up(self):
         # stream() once; step() goes on until the joint is there, no faster than its dps
         # (60 degrees/s: 250 positions/s, less the rounding down), whichever way it goes.

@@ -1124,7 +1124,7 @@ class Loop(Tidy):
         w, panel, token = self.panel(dps=30)
         panel._target(token, {"base": 90})
         self.tick(w, panel, token, 500)
-        self.assertTrue(panel.robot.updates > 30)
+        self.assertTrue(panel.robot.updates > 10)  # a frame each time the servo is there
         for _ in range(150):
             sent = panel.robot.updates
             self.tick(w, panel, token, 10, alive=False)
