@@ -9,11 +9,20 @@ import unittest
 import busservo
 import busservo_async
 import busservo_board
+import busservo_calibrate
 import busservo_motion
 import busservo_sim
 import busservo_web
 
-MODULES = (busservo, busservo_async, busservo_board, busservo_sim, busservo_motion, busservo_web)
+MODULES = (
+    busservo,
+    busservo_async,
+    busservo_board,
+    busservo_sim,
+    busservo_motion,
+    busservo_web,
+    busservo_calibrate,
+)
 
 # AsyncBusServo.__getattr__ forwards to its BusServo: its stub declares what it forwards, with
 # the signatures of BusServo's methods. {class: (the module, the class it forwards to)}
@@ -42,6 +51,7 @@ def instances():
         "Sequence": sequence,
         "Player": sequence.play(robot),
         "Panel": busservo_web.Panel(robot, "a password"),
+        "Calibration": busservo_calibrate.Calibration(bus, {"base": 1}),
     }
 
 
