@@ -51,9 +51,9 @@ if not I_HAVE_CHECKED_MY_ROBOT:
 # pose, at the two ends of its safe range, and nudged.
 HANDS = {
     "base": (512, 140, 880, 560),
-    "shoulder": (488, 200, 800, 440),  # mounted the other way round: forward is down
+    "shoulder": (488, 200, 800, 440),  # mounted the other way round: forward turns it back
     "elbow": (500, 150, 860, 545),
-    "wrist": (530, 180, 880, 480),
+    "wrist": (530, 180, 880, 480),  # the other way round too
     "gripper": (300, 300, 700, 350),  # closed at rest: one end of its range
 }
 OTHER = (500, 200, 800, 540)  # a joint you added
@@ -98,7 +98,7 @@ def ask(prompt, during=None):
     else:
         print(prompt, end=" ")
     try:
-        if sys.platform == "linux":  # the unix port: the terminal holds the line, echoed
+        if sys.platform in ("linux", "darwin"):  # the unix port: its terminal echoed the line
             line = sys.stdin.readline()
             if line:
                 return line.strip()
@@ -134,19 +134,26 @@ seen = Live("range seen, degrees")
 nudged = Live("nudged from the rest pose, degrees")
 
 
-def sample():
+def read(step):
+    """step()'s answer, or None for a read lost (noise on the line?): the next one will do."""
     try:
-        ranges = cal.sample()
+        return step()
     except OSError as e:
         if e.args[0] != errno.ETIMEDOUT:
-            raise
-        return  # a read lost (noise on the line?): the next one will do
-    seen.show(", ".join("%s %d" % (n, ranges[n][1] - ranges[n][0]) for n in cal.names))
+            raise  # a servo that does not answer: its joint is named
+    return None
+
+
+def sample():
+    ranges = read(cal.sample)
+    if ranges:
+        seen.show(", ".join("%s %d" % (n, ranges[n][1] - ranges[n][0]) for n in cal.names))
 
 
 def nudge():
-    moved = cal.nudge()
-    nudged.show(", ".join("%s %+d" % (n, moved[n]) for n in cal.names))
+    moved = read(cal.nudge)
+    if moved:
+        nudged.show(", ".join("%s %+d" % (n, moved[n]) for n in cal.names))
 
 
 def calibrate():

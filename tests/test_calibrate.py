@@ -395,6 +395,37 @@ class File(unittest.TestCase):
         self.assertEqual(self.read(), "the calibration before")
 
 
+class Picture(unittest.TestCase):
+    # docs/calibrate-rest-pose.svg, the rest pose the example asks for: well-formed, shown on
+    # docs/calibrate.md, naming every joint and link, and it renders (CPython's XML parser,
+    # and resvg, which tests/run.sh installs into .venv/; without resvg that part skips).
+    SVG = "docs/calibrate-rest-pose.svg"
+
+    def test_the_rest_pose_is_drawn_with_every_joint_and_link(self):
+        check = (
+            "import sys, xml.etree.ElementTree as E; r = E.parse(sys.argv[1]).getroot(); "
+            "print(r.tag, r.get('width'), r.get('height'))"
+        )
+        ok, out = sh('.venv/bin/python -c "%s" %s' % (check, self.SVG))
+        self.assertEqual(out.split(), ["{http://www.w3.org/2000/svg}svg", "800", "500"], out)
+        with open(self.SVG) as f:
+            text = f.read()
+        for name in tuple(IDS) + ("roll",) + bc.LINKS:
+            self.assertIn(">%s<" % name, text)
+        with open("docs/calibrate.md") as f:
+            self.assertIn("](calibrate-rest-pose.svg)", f.read())
+        png = scratch("rest-pose") + ".png"
+        try:
+            ok, out = sh(".venv/bin/python tests/render_svg.py %s %s" % (self.SVG, png))
+        finally:
+            sh("rm -f " + png)
+        if out.startswith("no renderer"):
+            print("\n*** SKIPPED: %s: %s (tests/run.sh installs it) ***" % (self.SVG, out.strip()))
+            raise unittest.SkipTest(out.strip())
+        self.assertTrue(ok, out)
+        self.assertTrue(out.startswith("800x500 colours="), out)
+
+
 # A board.py for the example: the simulated controller, each command it takes logged as a
 # line "CMD PARAMS..." (decimal bytes), and with PERSON, a person's hands at it. They hold the
 # rest pose once the joints go limp; at each positions read after the first (the rest pose's)
