@@ -75,10 +75,12 @@ def hold(pose):
 def ask(prompt, during=None):
     """Wait for the person, calling during() meanwhile: the line typed at the console after
     Enter, or "" for a press of board.py's button ("n" for a 1 s press). None with no
-    console (its input has ended)."""
+    console (its input has ended). A prompt that ends "then" is told which."""
+    if prompt.endswith(" then"):
+        prompt += " press the button" if button else " Enter:"
     if button:
         pin = button()
-        print(prompt, "(the button)")
+        print(prompt)
         while pin.value():
             if during:
                 during()
@@ -175,15 +177,15 @@ def calibrate():
         nudge()
         nudged.end()
         return True
-    if ask("1. hold the arm in its rest pose (docs/calibrate.md), then Enter:") is None:
+    if ask("1. hold the arm in its rest pose (docs/calibrate.md), then") is None:
         return False
     cal.rest()
-    if ask("2. move each joint through all its safe range, then Enter:", sample) is None:
+    if ask("2. move each joint through all its safe range, then", sample) is None:
         return False
     sample()
     seen.end()
     step = "3. put it back in its rest pose, nudge each joint a little in its positive"
-    if ask(step + " direction (docs/calibrate.md), hold it there, then Enter:", nudge) is None:
+    if ask(step + " direction (docs/calibrate.md), hold it there, then", nudge) is None:
         return False
     nudge()
     nudged.end()
@@ -237,7 +239,7 @@ if arm:
     if busservo_board.simulated:
         yes = True  # no one to ask
     elif button:
-        yes = ask("home now, at %d degrees/s? a press: yes, a 1 s press: no" % DPS) == ""
+        yes = ask("home now, at %d degrees/s? a press: yes; held 1 s: no" % DPS) == ""
     else:
         answer = ask("home now, at %d degrees/s? y and Enter (Enter alone: no):" % DPS)
         yes = answer is not None and answer.lower() == "y"

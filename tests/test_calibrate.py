@@ -442,6 +442,7 @@ NUDGED = %r
 
 class Board(busservo_sim.SimController):
     reads = -1  # positions reads since the joints went limp
+    presses = 0  # of the button (BUTTON, below)
 
     def _do(self, cmd, params):
         with open("log", "a") as f:
@@ -465,8 +466,36 @@ class Board(busservo_sim.SimController):
             self.turn(servo_id, position)
 
 
+board = Board()
+
+
 def uart():
-    return Board()
+    return board
+"""
+
+# With BOARD, a board.py that offers button(), as boards/esp32.py and boards/rp2.py do. The
+# person presses it (a short press: each value() call is one look) at each step once done:
+# at once for the rest pose, once the example has read the whole sweep and the nudge for the
+# range, at once for the nudge and the home.
+BUTTON = """
+
+class Button:
+    down = False
+
+    def value(self):
+        if self.down:  # let go at the next look
+            self.down = False
+            board.presses += 1
+        elif board.presses != 1 or board.reads >= 13:
+            self.down = True
+        return 0 if self.down else 1
+
+
+pin = Button()
+
+
+def button():
+    return pin
 """
 
 
@@ -583,6 +612,24 @@ class Example(unittest.TestCase):
         self.assertEqual(
             sorted(set(cmd[0] for cmd in taken)), [CMD_MULT_SERVO_UNLOAD, CMD_MULT_SERVO_POS_READ]
         )
+
+    def test_with_the_boards_button_no_keys_are_needed(self):
+        # As `mpremote run` would: nothing comes from the console at all.
+        self.write("board.py", BOARD % (True, REST, ENDS, NUDGED) + BUTTON)
+        ok, out = sh(
+            "cd %s && sh %s/boards/unix.sh calibrate.py </dev/null" % (self.dir, os.getcwd())
+        )
+        self.assertTrue(ok, out)
+        for line in (
+            "1. hold the arm in its rest pose (docs/calibrate.md), then press the button\n",
+            "  range seen, degrees: " + SEEN,
+            "saved robot.json:",
+            "home now, at 30 degrees/s? a press: yes; held 1 s: no\n",
+            "home: base 0.0, shoulder 0.0, elbow 0.0, wrist 0.0, gripper 3.1 degrees",
+        ):
+            self.assertIn(line, out)
+        with open(self.dir + "/robot.json") as f:
+            self.assertFalse("links" in json.loads(f.read()))  # no keys: no links
 
     def test_no_home_unless_the_person_says_y(self):
         ok, out, taken = self.run_typed(
