@@ -2,13 +2,15 @@
 #     include("path/to/busservo/manifest.py")
 # or, with the simulated controller, the asyncio interface and the motion layer too,
 #     include("path/to/busservo/manifest.py", sim=True, asyncio=True, motion=True)
+# arm=True freezes the arm in millimetres (busservo_arm) and calibration=True the calibration by
+# hand (busservo_calibrate), each with the motion layer they stand on.
 # web=True freezes the web panel (busservo_web) too; it needs its page copied to the board's
 # /lib: mpremote cp lib/busservo_web.html.gz :/lib/
 metadata(
     description="Driver for the serial Bus Servo Controller (LOBOT/Hiwonder, 0x55 0x55 frames).",
     version="0.1.0",
 )
-options.defaults(sim=False, asyncio=False, motion=False, web=False)
+options.defaults(sim=False, asyncio=False, motion=False, web=False, arm=False, calibration=False)
 
 module("busservo.py", base_path="lib")
 module("busservo_board.py", base_path="lib")  # how the examples find board.py
@@ -16,7 +18,11 @@ if options.sim:
     module("busservo_sim.py", base_path="lib")
 if options.asyncio:
     module("busservo_async.py", base_path="lib")
-if options.motion or options.web:
+if options.motion or options.web or options.arm or options.calibration:
     module("busservo_motion.py", base_path="lib")
 if options.web:
     module("busservo_web.py", base_path="lib")
+if options.arm:
+    module("busservo_arm.py", base_path="lib")
+if options.calibration:
+    module("busservo_calibrate.py", base_path="lib")

@@ -18,7 +18,9 @@
 #   least every 3 days;
 # - ACTION_GROUP_SPEED scales a group's durations (ALL_GROUPS: every group);
 #   power_cycle() forgets it, as the controller does at power-off;
-# - unload lets servos go limp where they are (`limp`) until they are moved;
+# - unload lets servos go limp where they are (`limp`) until they are moved, and
+#   turn(servo_id, position) is a person's hand: it turns a limp servo there at once,
+#   as a hand puts it (True); a servo under power holds where it is (False);
 # - a servo in `missing` (ids) does not answer: a position read gives 65535 for it,
 #   as a controller does for a servo unpowered or not on the bus;
 # - the battery reads `battery` mV;
@@ -91,6 +93,17 @@ class SimController:
         if not 0 <= done < time_ms:  # done, or a servo never moved (t0 = 0)
             return target
         return start + (target - start) * done // time_ms
+
+    def turn(self, servo_id, position):
+        """Turn servo_id by hand to position: a limp servo is there at once (True); one
+        under power holds where it is, and this returns False."""
+        end = PWM_LIMIT if servo_id in self.pwm else LIMIT
+        if type(position) is not int or not 0 <= position <= end:
+            raise ValueError("position must be an int in 0..%d, got %r" % (end, position))
+        if servo_id not in self.limp:
+            return False  # its motor holds it against the hand
+        self._servos[servo_id] = (position, position, self._ticks_ms(), 0)
+        return True
 
     def speed(self, group):
         """The group's speed in percent."""

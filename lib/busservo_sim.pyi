@@ -16,7 +16,9 @@ It decodes what the driver writes and answers as the protocol says:
   another group);
 - ACTION_GROUP_SPEED scales a group's durations (ALL_GROUPS: every group); power_cycle()
   forgets it, as the controller does at power-off;
-- unload lets servos go limp where they are (`limp`) until they are moved;
+- unload lets servos go limp where they are (`limp`) until they are moved, and
+  turn(servo_id, position) is a person's hand: it turns a limp servo there at once (True); a
+  servo under power holds where it is (False);
 - a servo in `missing` does not answer: a position read gives 65535 for it, as a controller
   does for a servo unpowered or not on the bus (the driver reads it as None);
 - the battery reads `battery` mV;
@@ -76,6 +78,12 @@ class SimController:
         """Power off and on: groups stop (silently) and speeds are forgotten."""
     def position(self, servo_id: int) -> int:
         """Where servo_id is now."""
+    def turn(self, servo_id: int, position: int) -> bool:
+        """Turn servo_id by hand to position (0..LIMIT; a PWM servo's, 0..PWM_LIMIT), as a
+        person does, for tests of calibration and teaching: a limp servo (in `limp`) is there
+        at once, and stays limp: True. A servo under power holds where it is: False. A
+        position out of range raises ValueError. (A PWM servo turns here too; a real one has
+        no wire to tell the controller where a hand put it.)"""
     def speed(self, group: int) -> int:
         """The group's speed in percent."""
     @property

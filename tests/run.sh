@@ -39,10 +39,10 @@ cd "$(dirname "$0")/.."
 # module that imports it and looks at those: test_commands (busservo, that its __file__ is the
 # .mpy, and that a traceback from inside it names the line), test_sim (busservo_sim, and
 # busservo_board's fall-back to it), test_async (busservo_async), test_motion
-# (busservo_motion), test_arm (busservo_arm) and test_web (busservo_web, and the page it
-# serves, found beside the .mpy).
+# (busservo_motion), test_arm (busservo_arm), test_calibrate (busservo_calibrate) and test_web
+# (busservo_web, and the page it serves, found beside the .mpy).
 # The rest would run the same code again. --mpy-all runs every module against the .mpy too.
-MPY="test_commands test_sim test_async test_motion test_arm test_web"
+MPY="test_commands test_sim test_async test_motion test_arm test_calibrate test_web"
 # The longest modules start first, so that the short ones fill the other cores meanwhile and
 # the run ends soon after its longest module does (in the order of their times, measured).
 SLOW="test_soak test_browser test_examples test_web test_reliability test_install test_e2e"
@@ -51,7 +51,8 @@ SLOW="$SLOW test_scripts test_bench_web test_arm test_docs"
 # at a lower priority (nice 10): they lose nothing by waiting for a core, and the modules on
 # real time beside them (the web panel, the browser, the pty, the examples), which can, get
 # one first. test_soak (a day of the panel) takes most of the suite's CPU time.
-NICE="test_reliability test_soak test_wire test_motion test_arm test_bench_motion test_bench_arm"
+NICE="test_reliability test_soak test_wire test_motion test_arm test_calibrate test_bench_motion"
+NICE="$NICE test_bench_arm"
 CODE="lib tests examples boards"
 COUNTS="tests/run.sh-counts:"  # the last line of a module's run: tests run, failed, skipped
 

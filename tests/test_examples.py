@@ -17,6 +17,7 @@ SIMULATED = "no board.py found: using the simulated controller, nothing real mov
 EXPECT = {
     "async_demo.py": "action group 1 completed",
     "battery.py": "battery: 7.50 V",
+    "calibrate.py": "the joints are limp: hold the arm",
     "check_wiring.py": "battery: 7.50 V",
     "demo.py": "action group 1 completed",
     "group.py": "ACTION_GROUP_STOP running: False group: 2 times: 0",
@@ -88,7 +89,7 @@ def run_all(runs):
 MOVING = ("async_demo.py", "demo.py", "group.py", "move.py", "move_many.py", "unload.py")
 # The motion layer's: on a board their joints turn at most 30 degrees a second (DPS), which
 # their moves' times show, rather than 2 s a move (a stream's frames take ~26 ms each).
-MOTION = ("playback.py", "stream.py", "teach.py", "web_panel.py")
+MOTION = ("calibrate.py", "playback.py", "stream.py", "teach.py", "web_panel.py")
 MOVING += MOTION
 
 # The controller's commands that make servos move (or go limp).

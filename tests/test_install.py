@@ -382,6 +382,19 @@ class Manifest(unittest.TestCase):
                 "lib/busservo_web.py",
             ],
         )
+        named, meta = self.run_manifest(arm=True, calibration=True)  # both on the motion layer
+        self.assertEqual(
+            named,
+            [
+                "lib/busservo.py",
+                "lib/busservo_board.py",
+                "lib/busservo_motion.py",
+                "lib/busservo_arm.py",
+                "lib/busservo_calibrate.py",
+            ],
+        )
+        for path in named:
+            os.stat(path)
         self.assertEqual(meta["version"], version_of_package_json())
 
     def test_the_driver_says_the_version_package_json_says(self):

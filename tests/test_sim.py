@@ -414,5 +414,50 @@ class Line(unittest.TestCase):
         self.assertTrue(time.ticks_diff(time.ticks_ms(), start) >= 28)
 
 
+class Hands(unittest.TestCase):
+    # SimController.turn(): a person's hand. It turns a limp servo, as a hand turns a servo
+    # unloaded by CMD_MULT_SERVO_UNLOAD; a servo under power holds, and the call says so.
+
+    def setUp(self):
+        self.clock = Clock()
+        self.sim = SimController(ticks_ms=self.clock, baudrate=None)
+        self.bus = busservo.BusServo(self.sim)
+
+    def test_a_limp_servo_goes_where_the_hand_puts_it(self):
+        self.bus.unload([1, 2])  # 55 55 05 14 02 01 02
+        self.assertTrue(self.sim.turn(1, 250))
+        self.assertTrue(self.sim.turn(2, 1000))
+        self.assertEqual(read_positions(self.sim, [1, 2]), {1: 250, 2: 1000})
+        self.assertEqual(self.sim.limp, {1, 2})  # still limp: the hand let go
+        self.assertTrue(self.sim.turn(1, 0))
+        self.assertEqual(read_positions(self.sim, [1]), {1: 0})
+
+    def test_a_servo_under_power_holds_and_the_call_says_so(self):
+        self.assertFalse(self.sim.turn(1, 250))  # never unloaded: it holds 500
+        self.bus.unload([2])
+        self.bus.move(2, 800, 1000)  # a move gives it its torque back
+        self.clock.step(500)
+        self.assertFalse(self.sim.turn(2, 100))
+        self.assertEqual(read_positions(self.sim, [1, 2]), {1: 500, 2: 650})
+        self.clock.step(500)
+        self.assertEqual(read_positions(self.sim, [2]), {2: 800})
+
+    def test_a_move_after_the_hand_starts_from_where_it_left_the_servo(self):
+        self.bus.unload([3])
+        self.sim.turn(3, 100)
+        self.bus.move(3, 500, 1000)
+        self.clock.step(500)
+        self.assertEqual(read_positions(self.sim, [3]), {3: 300})
+
+    def test_no_hand_turns_a_servo_beyond_its_range(self):
+        self.sim.pwm.add(6)
+        self.bus.unload([1, 6])
+        for servo_id, position in ((1, 1001), (1, -1), (1, 500.0), (6, 2501)):
+            with self.assertRaises(ValueError):
+                self.sim.turn(servo_id, position)
+        self.assertTrue(self.sim.turn(6, 2500))  # a PWM servo's, in us
+        self.assertEqual(read_positions(self.sim, [1, 6]), {1: 500, 6: 2500})
+
+
 if __name__ == "__main__":
     unittest.main()

@@ -10,6 +10,7 @@ import busservo
 import busservo_arm
 import busservo_async
 import busservo_board
+import busservo_calibrate
 import busservo_motion
 import busservo_sim
 import busservo_web
@@ -22,6 +23,7 @@ MODULES = (
     busservo_motion,
     busservo_web,
     busservo_arm,
+    busservo_calibrate,
 )
 
 # AsyncBusServo.__getattr__ forwards to its BusServo: its stub declares what it forwards, with
@@ -57,6 +59,7 @@ def instances():
         "Panel": busservo_web.Panel(robot, "a password"),
         "Arm": arm,
         "Line": arm.line_to(120, 0, 50),
+        "Calibration": busservo_calibrate.Calibration(bus, {"base": 1}),
     }
 
 
