@@ -1,8 +1,9 @@
 #!/bin/sh
 # The test suite: set up the MicroPython unix port (boards/unix.sh), run every tests/test_*.py
-# on it, one process a module and several at once, the five that look at what loading a .mpy
+# on it, one process a module and several at once, the seven that look at what loading a .mpy
 # changes (MPY, in this file) again against the .mpy files mpy-cross makes of lib/, check the
-# style and the types, and end with the line "N passed, N failed" (", N skipped" when some
+# style and the types, check that the checkout is as it was (no test writes outside a scratch
+# folder of its own), and end with the line "N passed, N failed" (", N skipped" when some
 # were). Exits non-zero if any test failed or any module did not run to its end.
 #
 #   sh tests/run.sh                            # all of it
@@ -413,6 +414,15 @@ $names
 EOF
 }
 
+# The checkout as it stands: each file and folder but .git/ and .venv/ (what the set-up
+# installs), with its size and time. No test writes outside a scratch folder of its own: one
+# that did (a maker's sequences/, teach.json or web_panel.txt overwritten, a folder made and
+# removed again) changes it, and the run fails, naming what changed.
+checkout() {
+    find . \( -path ./.git -o -path ./.venv \) -prune -o -printf '%p %y %s %T@\n' | LC_ALL=C sort
+}
+checkout >"$tmp/checkout.before"
+
 # Start the jobs, at most $jobs at once, and print each job's result once it and all the
 # jobs before it have ended.
 RUN_SH_K=$pattern  # (empty: every test, whatever a run.sh that runs this one was given)
@@ -441,6 +451,17 @@ while [ $running -gt 0 ]; do
     show_ended
 done
 show_ended
+
+checkout >"$tmp/checkout.after"
+changed=$(LC_ALL=C comm -3 "$tmp/checkout.before" "$tmp/checkout.after" |
+    sed 's/^[[:space:]]*//; s/ [^ ]* [^ ]* [^ ]*$//' | LC_ALL=C sort -u)
+if [ -n "$changed" ]; then
+    echo "the checkout: changed while the tests ran (a test wrote outside its scratch folder,"
+    echo "or a file was edited meanwhile):"
+    printf '%s\n' "$changed" | sed 's/^/  /'
+    note_failure "the checkout: the run changed what it holds (see above)"
+    failed=$((failed + 1))
+fi
 
 # What failed, by name, just above the counts (which CI reads from the very last line).
 if [ -n "$failures" ]; then

@@ -432,11 +432,27 @@ class Slow(unittest.TestCase):
 """
 
 
+# A module whose test writes in the checkout it runs from: a maker's teach.json
+# overwritten, and a folder made and removed again.
+WRITES = """import os
+import unittest
+
+
+class Writes(unittest.TestCase):
+    def test_writes(self):
+        with open("teach.json", "w") as f:
+            f.write("[[1, 2]]")
+        os.mkdir("tests/sequences")
+        os.rmdir("tests/sequences")
+"""
+
+
 class RunSh(unittest.TestCase):
     # tests/run.sh in a checkout of its own, with the set-up borrowed from this one and two
     # test modules that fail in every way they can, and one that passes.
     def setUp(self):
         repo = self.repo = folder("suite")
+        self.talk = folder("talk")  # where the modules below talk: not in their checkout
         for sub in ("boards", "tests", "lib", "examples", ".venv"):
             os.mkdir(repo + "/" + sub)
         ok, out = sh(
@@ -453,7 +469,7 @@ class RunSh(unittest.TestCase):
         write(repo + "/tests/test_fine.py", FINE)
 
     def tearDown(self):
-        sh("rm -rf " + self.repo)
+        sh("rm -rf %s %s" % (self.repo, self.talk))
 
     def run_sh(self, args=""):
         """(ok, its lines) of tests/run.sh args, in the checkout of its own."""
@@ -519,8 +535,8 @@ class RunSh(unittest.TestCase):
     def test_modules_run_at_once_and_are_printed_in_their_order(self):
         # test_first ends after test_second, yet is printed first. One at a time, neither
         # would hear from the other.
-        first = TOGETHER % (self.repo, "first started", "second started", 'heard("second ended")')
-        second = TOGETHER % (self.repo, "second started", "first started", 'say("second ended")')
+        first = TOGETHER % (self.talk, "first started", "second started", 'heard("second ended")')
+        second = TOGETHER % (self.talk, "second started", "first started", 'say("second ended")')
         write(self.repo + "/tests/test_first.py", first)
         write(self.repo + "/tests/test_second.py", second)
         self.assertEqual(
@@ -539,10 +555,10 @@ class RunSh(unittest.TestCase):
         )
 
     def test_ctrl_c_stops_each_module_and_what_it_left_running(self):
-        write(self.repo + "/tests/test_slow.py", SLOW % self.repo)
-        base = self.repo + "/run"
+        write(self.repo + "/tests/test_slow.py", SLOW % self.talk)
+        base = self.talk + "/run"
         pid = launch("sh %s/tests/run.sh test_slow" % self.repo, base, terminal=True)
-        sleeper = wait_until(self.repo + "/sleeper", "\n", 15000)
+        sleeper = wait_until(self.talk + "/sleeper", "\n", 15000)
         self.assertTrue(sleeper, read(base + ".log"))
         os.system("kill -s INT -- -%d" % pid)  # Ctrl-C
         self.assertEqual(ended(base, pid), 130, read(base + ".log"))
@@ -551,6 +567,29 @@ class RunSh(unittest.TestCase):
         gone = wait_until_false(lambda: sh(alive)[0], 5000)
         os.system("kill %s 2>/dev/null" % sleeper.strip())
         self.assertTrue(gone, "the module's sleeper is still running")
+
+    def test_a_test_that_writes_in_the_checkout_fails_the_run_naming_what_it_changed(self):
+        # A maker's own teach.json overwritten, a sequences/ folder made and removed again:
+        # every test passed, and the run fails all the same.
+        write(self.repo + "/teach.json", "[]")
+        write(self.repo + "/tests/test_writes.py", WRITES)
+        ok, lines = self.run_sh("test_writes test_fine")
+        self.assertFalse(ok, lines)
+        self.assertEqual(lines[0:2], ["test_writes: 1 passed", "test_fine: 2 passed"], lines)
+        self.assertEqual(
+            lines[-3:],
+            [
+                "Failed:",
+                "  the checkout: the run changed what it holds (see above)",
+                "3 passed, 1 failed",
+            ],
+            lines,
+        )
+        self.assertIn("  ./teach.json", lines)
+        self.assertIn("  ./tests", lines)  # where the sequences/ folder was made and removed
+        self.assertEqual(
+            self.run_sh("test_fine"), (True, ["test_fine: 2 passed", "2 passed, 0 failed"])
+        )
 
     def test_bad_arguments_are_refused_saying_why(self):
         for args, said in (
