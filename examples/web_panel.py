@@ -7,7 +7,7 @@
 # On a board with Wi-Fi (ESP32, Pico W): its board.py gives uart() and, to join your
 # network, WIFI = ("network name", "its password"); without WIFI the board starts its own
 # access point, "busservo", whose WPA2 key is the panel's password. The board prints the
-# address to open and the password. Install the panel first (README: the web panel).
+# address to open and the password. Install the panel first (docs/panel.md).
 #   mpremote run examples/web_panel.py
 # On the unix port, against the simulated controller, at http://127.0.0.1:8080 (and on your
 # PC's other addresses: it listens on every interface, as a board does):

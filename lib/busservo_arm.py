@@ -139,19 +139,7 @@ class Arm:
     def save(self, path=CALIBRATION):
         """Write the joints' calibration and the links to path as JSON, keeping what else the
         file holds (Robot.load() and Arm.load() read it)."""
-        config = {}
-        try:
-            with open(path) as f:
-                config = json.load(f)
-        except (OSError, ValueError):
-            pass
-        if _type(config) is not dict:
-            config = {}
-        robot = self.robot
-        config["joints"] = {name: robot.joints[name].config() for name in robot.names}
-        config["links"] = dict(self.links)
-        with open(path, "w") as f:
-            json.dump(config, f)
+        self.robot.save(path, links=dict(self.links))
 
     # The geometry.
 

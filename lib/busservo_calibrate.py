@@ -28,7 +28,6 @@
 # forward and down (shoulder 0: the upper arm vertical; elbow 0 and wrist 0: in line with
 # the link before); roll turns the hand clockwise seen from behind it; gripper opens.
 import errno
-import json
 
 import busservo_motion as bm
 
@@ -203,16 +202,13 @@ class Calibration:
     def save(self, path=None, links=None):
         """Write the calibration to path (default busservo_board.CALIBRATION, robot.json)
         as Robot.load() reads it, with links {name: mm} of LINKS if given (measured with a
-        ruler, for busservo_arm). Refuses as robot() does, before the file is touched.
-        Returns the Robot."""
+        ruler, for busservo_arm), keeping what else the file holds (links saved before).
+        Refuses as robot() does, before the file is touched. Returns the Robot."""
         robot = self.robot()
-        config = {"joints": {name: robot.joints[name].config() for name in robot.names}}
-        if links is not None:
-            config["links"] = _links(links)
+        more = {} if links is None else {"links": _links(links)}
         if path is None:
             from busservo_board import CALIBRATION as path
-        with open(path, "w") as f:
-            json.dump(config, f)
+        robot.save(path, **more)  # what else the file holds (the links measured before) kept
         return robot
 
 

@@ -87,6 +87,7 @@ class Calibration:
     def save(self, path: str | None = None, links: Mapping[str, float] | None = None) -> Robot:
         """Write the calibration to path (default busservo_board.CALIBRATION, robot.json) as
         Robot.load() reads it, with links {name: mm} of LINKS if given (measured with a ruler,
-        for busservo_arm): {"joints": {name: Joint settings}, "links": {...}}. Refuses as
+        for busservo_arm): {"joints": {name: Joint settings}, "links": {...}}, keeping what
+        else the file holds (links saved before). Refuses as
         robot() does, and links that are not LINKS in 0..10000 mm, before the file is
         touched. Returns the Robot."""

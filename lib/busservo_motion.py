@@ -236,9 +236,19 @@ class Robot:
                 raise TypeError("%s: joint %r: %s" % (path, name, e))
         return Robot(bus, joints)
 
-    def save(self, path):
-        """Write the joints' calibration to path as JSON (Robot.load() reads it)."""
-        config = {"joints": {name: self.joints[name].config() for name in self.names}}
+    def save(self, path, **more):
+        """Write the joints' calibration to path as JSON (Robot.load() reads it), and the
+        keys in more (busservo_arm's links=...), keeping what else the file holds."""
+        config = {}
+        try:
+            with open(path) as f:
+                config = json.load(f)
+        except (OSError, ValueError):
+            pass  # no file yet, or not one of ours: written afresh
+        if _type(config) is not dict:
+            config = {}
+        config.update(more)
+        config["joints"] = {name: self.joints[name].config() for name in self.names}
         with open(path, "w") as f:
             json.dump(config, f)
 

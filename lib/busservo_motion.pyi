@@ -107,8 +107,9 @@ class Robot:
     def load(bus: BusServo, path: str) -> Robot:
         """A Robot on bus with the calibration save() wrote to path (JSON). A file that is not
         valid JSON, or holds no "joints", raises ValueError naming the file and why."""
-    def save(self, path: str) -> None:
-        """Write the joints' calibration to path as JSON."""
+    def save(self, path: str, **more: object) -> None:
+        """Write the joints' calibration to path as JSON, and the keys in more (links=...),
+        keeping what else the file holds."""
     def move(self, targets: _Pose, ms: int | None = None, dps: float | None = None) -> int:
         """Move joints {name: degrees} together, in one CMD_SERVO_MOVE: within ms (0..65535),
         or at dps degrees per second for the joint that goes furthest (one of the two). A

@@ -1,7 +1,7 @@
 """busservo_web: a control panel for a busservo_motion.Robot, served by the board itself to a
 browser on the same Wi-Fi (or on the board's own access point), on asyncio, with a small HTTP
 server of its own. An optional module: it needs busservo, busservo_motion, and its page
-busservo_web.html.gz beside it (the README's mip command brings them all).
+busservo_web.html.gz beside it (docs/panel.md's mip command brings them all).
 
     import asyncio, busservo_web
     asyncio.run(busservo_web.serve(robot, "a password of yours", port=80))

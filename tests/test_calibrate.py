@@ -364,6 +364,23 @@ class File(unittest.TestCase):
         robot.save(self.path)
         self.assertEqual(mine, json.loads(self.read()))
 
+    def test_calibrating_again_keeps_the_links_measured_before(self):
+        # The arm's links were measured with a ruler and saved once; the joints calibrated
+        # again (a servo replaced) leave them, and what else the file holds, as they were.
+        calibrate(self.w, self.cal)
+        links = {"base_height": 70, "upper_arm": 105, "forearm": 98.5, "hand": 60}
+        self.cal.save(self.path, links)
+        saved = json.loads(self.read())
+        saved["note"] = "the blue arm"
+        with open(self.path, "w") as f:
+            json.dump(saved, f)
+        cal = bc.Calibration(self.bus, IDS)
+        calibrate(self.w, cal)
+        cal.save(self.path)
+        again = json.loads(self.read())
+        self.assertEqual((again["links"], again["note"]), (links, "the blue arm"))
+        self.assertEqual(sorted(again["joints"]), sorted(IDS))
+
     def test_the_default_path_is_the_boards_calibration(self):
         calibrate(self.w, self.cal)
         default = busservo_board.CALIBRATION

@@ -4,6 +4,7 @@
 # world's clock: busservo.time = busservo_motion.time = w.clock.
 import asyncio
 import errno
+import json
 import math
 import os
 import time
@@ -184,6 +185,30 @@ class Calibration(Tidy):
         self.assertEqual(
             again.joints["shoulder"].position(-45), arm(bus).joints["shoulder"].position(-45)
         )
+
+    def test_save_writes_the_joints_and_keeps_what_else_the_file_holds(self):
+        # An arm's links beside the joints (busservo_arm) are kept; more keys are added; a
+        # file that is not a calibration is written afresh.
+        w, bus = world()
+        path = scratch("motion") + ".json"
+        try:
+            with open(path, "w") as f:
+                f.write('{"joints": {"old": {"servo_id": 9}}, "links": {"hand": 60}}')
+            arm(bus).save(path)
+            with open(path) as f:
+                saved = json.load(f)
+            self.assertEqual(saved["links"], {"hand": 60})
+            self.assertEqual(sorted(saved["joints"]), ["base", "claw", "shoulder"])
+            arm(bus).save(path, links={"hand": 61})
+            with open(path) as f:
+                self.assertEqual(json.load(f)["links"], {"hand": 61})
+            with open(path, "w") as f:
+                f.write("[1, 2]")
+            arm(bus).save(path)
+            with open(path) as f:
+                self.assertEqual(sorted(json.load(f)), ["joints"])
+        finally:
+            os.remove(path)
 
     def test_a_file_that_is_no_calibration_or_sequence_says_which_and_why(self):
         w, bus = world()
