@@ -395,10 +395,11 @@ class Arm:
         dz = (z1 - h * math.sin(p1 * _RAD)) - (z0 - h * math.sin(p0 * _RAD))
         return max(tool, math.sqrt(dx * dx + dy * dy + dz * dz))
 
-    def where(self):
+    def where(self, positions=None):
         """(x, y, z, pitch) of the tool point, from the joints' positions read now (a
-        blocking query), to 0.1 mm and 0.1 degree."""
-        got = self.robot.where(JOINTS)
+        blocking query), or from positions {servo_id: position} read before (not
+        blocking: Robot.where()), to 0.1 mm and 0.1 degree."""
+        got = self.robot.where(JOINTS, positions)
         self._at = [got[name] for name in JOINTS]
         x, y, z, pitch = self._point(*self._at)
         return round(x, 1), round(y, 1), round(z, 1), round(pitch, 1)

@@ -23,7 +23,7 @@ A point the arm cannot reach, or only past a joint's limits, raises ValueError n
 the reach and the limiting joint, and nothing is sent.
 """
 
-from typing import Any, Generator
+from typing import Any, Generator, Mapping
 
 from busservo import BusServo
 from busservo_motion import Robot
@@ -87,10 +87,13 @@ class Arm:
         in a straight line from where the arm last went (move_to(), a line, or where(); read
         first if none: a blocking query). A joint's own dps lengthens the move. Stops a line
         playing. Returns the move's ms."""
-    def where(self) -> tuple[float, float, float, float]:
+    def where(
+        self, positions: Mapping[int, int | None] | None = None
+    ) -> tuple[float, float, float, float]:
         """(x, y, z, pitch) of the tool point from the joints' positions read now (a blocking
-        query), to 0.1 mm and 0.1 degree. A servo that does not answer raises OSError(ENODEV)
-        naming its joint."""
+        query), or from positions {servo_id: position} read before (not blocking), to 0.1 mm
+        and 0.1 degree. A servo that does not answer raises OSError(ENODEV) naming its
+        joint."""
     def line_to(
         self, x: float, y: float, z: float, pitch: float | None = None, mm_s: float = 50
     ) -> Line:

@@ -272,12 +272,14 @@ class Robot:
             out[i] = joint.position(degrees)
         return out, clamped
 
-    def _read(self, indices):
-        # Read positions of these joints into _at. A servo that does not answer (its
-        # position None) has no angle: refuse it by name, before anything is changed.
-        got = self.bus.read_positions([self._ids[i] for i in indices])
+    def _read(self, indices, got=None):
+        # Read positions of these joints into _at (or take them from got). A servo that
+        # does not answer (its position None, or none read) has no angle: refuse it by
+        # name, before anything is changed.
+        if got is None:
+            got = self.bus.read_positions([self._ids[i] for i in indices])
         for i in indices:
-            if got[self._ids[i]] is None:
+            if got.get(self._ids[i]) is None:
                 raise OSError(
                     errno.ENODEV,
                     "joint %r: servo %d does not answer (unpowered, its cable, or its id?)"
@@ -328,11 +330,13 @@ class Robot:
         self.slowed += slowed
         return took
 
-    def where(self, names=None):
+    def where(self, names=None, positions=None):
         """{name: degrees} of these joints (all by default), read from the
-        controller now (a blocking query), to 0.1 degree."""
+        controller now (a blocking query), to 0.1 degree; or, not blocking, from
+        positions {servo_id: position} read before (the driver's ask() leaves them
+        in bus.positions)."""
         indices = list(range(len(self.names))) if names is None else [self._i(n) for n in names]
-        self._read(indices)
+        self._read(indices, positions)
         return {self.names[i]: round(self._joints[i].degrees(self._at[i]), 1) for i in indices}
 
     def capture(self):

@@ -117,10 +117,14 @@ class Robot:
         blocking query). A joint's own dps lengthens the move if need be (counted in slowed).
         Targets beyond the limits are clamped (counted in clamped). Returns the move's ms.
         Ends the stream."""
-    def where(self, names: Iterable[str] | None = None) -> dict[str, float]:
+    def where(
+        self, names: Iterable[str] | None = None, positions: Mapping[int, int | None] | None = None
+    ) -> dict[str, float]:
         """{name: degrees} of these joints (all by default), read now (a blocking query), to
-        0.1 degree. A servo that does not answer (unpowered, not on the bus: it reads 65535)
-        raises OSError(ENODEV) naming its joint."""
+        0.1 degree; or, not blocking, from positions {servo_id: position} read before (after
+        the driver's ask(), bus.positions). A servo that does not answer (unpowered, not on
+        the bus: it reads 65535), or has no position in positions, raises OSError(ENODEV)
+        naming its joint."""
     def capture(self) -> dict[str, float]:
         """The pose the robot is in, {name: degrees} of every joint, read now: after limp(),
         pose the robot by hand, then capture()."""

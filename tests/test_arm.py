@@ -305,6 +305,8 @@ class Moves(Tidy):
         x, y, z, pitch = a.where()
         self.assertTrue(near((x, y, z, pitch), (150, -60, 40, -80), 1.5), (x, y, z, pitch))
         self.assertEqual(round(x, 1), x)
+        bus.read_positions([1, 2, 3, 4])
+        self.assertEqual(a.where(bus.positions), (x, y, z, pitch))  # not blocking: read before
 
     def test_a_servo_that_does_not_answer_is_refused_by_name(self):
         w, bus = world()

@@ -292,6 +292,28 @@ class Moves(Tidy):
         self.assertEqual(a.where(), {"base": 29.8, "shoulder": -45.0, "claw": 45.0})
         self.assertEqual(a.where(["claw"]), {"claw": 45.0})
 
+    def test_where_from_positions_read_before_sends_nothing(self):
+        # After the driver's ask() (a query that never blocks the loop), bus.positions holds
+        # the answer: where() makes the angles of it and sends nothing. A joint whose servo
+        # has no position there is refused by name.
+        w, bus = world()
+        a = arm(bus)
+        hand(w, {1: 624, 2: 702, 6: 2000})
+        for _ in bus.ask([1, 2, 6]):
+            w.clock.advance_ms(1)
+        sent = len(w.frames())
+        self.assertEqual(
+            a.where(positions=bus.positions), {"base": 29.8, "shoulder": -45.0, "claw": 45.0}
+        )
+        self.assertEqual(a.where(["claw"], {6: 2000}), {"claw": 45.0})
+        try:
+            a.where(positions={1: 624, 6: 2000})
+            error = None
+        except OSError as e:
+            error = e
+        self.assertIn("joint 'shoulder': servo 2 does not answer", str(error))
+        self.assertEqual(len(w.frames()), sent)
+
     def test_a_servo_that_does_not_answer_is_refused_by_name(self):
         # It reads 65535 (None to the driver): no angle is made of it, and nothing moves.
         w, bus = world()
