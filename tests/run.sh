@@ -47,11 +47,12 @@ cd "$(dirname "$0")/.."
 MPY="test_commands test_sim test_async test_motion test_arm test_calibrate test_web"
 # The CPython pass: the same modules run on a computer (lib/busservo_cpython.py gives CPython
 # what it lacks, tests/cpython.py the tests), labelled "(CPython)": the driver's, the
-# simulator's, the wire world's, the motion's, the arm's and the panel's, and test_host (the
-# serial port through pyserial on a pty, the busservo command, pip install .), which runs on
-# CPython only (CPY_ONLY).
-CPY="test_frames test_commands test_queries test_sim test_reliability test_motion test_arm"
-CPY="$CPY test_web test_host"
+# simulator's, the wire world's, asyncio's, the motion's, the arm's, the calibration's and the
+# panel's, and test_host (the serial port through pyserial on a pty, the busservo command,
+# pip install .), which runs on CPython only (CPY_ONLY). test_wire and test_soak look at the
+# world's own heap and its MicroPython-style asyncio: not on CPython.
+CPY="test_frames test_commands test_queries test_sim test_reliability test_async test_motion"
+CPY="$CPY test_arm test_calibrate test_web test_host"
 CPY_ONLY="test_host"
 # The longest modules start first, so that the short ones fill the other cores meanwhile and
 # the run ends soon after its longest module does (in the order of their times, measured).
