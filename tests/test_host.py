@@ -61,6 +61,17 @@ class OnAPty(Scratch):
         )
         self.assertTrue(wait_for(self.link, 10), "the simulator did not start")
         self.uarts = []
+        # The link comes as the simulator starts: its first answer says it is up (a loaded
+        # machine may take seconds).
+        with busservo_host.serial_port(self.link) as uart:
+            bus = busservo.BusServo(uart)
+            for _ in range(20):
+                try:
+                    bus.read_battery(timeout_ms=1000)
+                    break
+                except OSError as e:
+                    if e.errno != errno.ETIMEDOUT:
+                        raise
 
     def tearDown(self):
         for uart in self.uarts:
