@@ -27,7 +27,7 @@ def const(x):
     return x
 
 
-class bytearray8(bytearray):  # noqa: N801 (named as the type it stands for)
+class bytearray8(bytearray):
     """A bytearray that keeps the low 8 bits of an int stored in it, as MicroPython's
     does (CPython's raises ValueError): the driver stores 16-bit values' low bytes so."""
 

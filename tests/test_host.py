@@ -284,6 +284,35 @@ class CommandLine(Scratch):
         self.assertEqual(panel.returncode, 130)
 
 
+class WhatCPythonLacks(unittest.TestCase):
+    # lib/busservo_cpython.py, as MicroPython has it (the driver's tests on CPython use it all).
+    def test_ticks_wrap_at_2_to_the_30_as_on_a_32_bit_board(self):
+        import busservo_cpython as mp
+
+        top = (1 << 30) - 1
+        self.assertEqual(mp.ticks_add(top, 1), 0)
+        self.assertEqual(mp.ticks_diff(0, top), 1)
+        self.assertEqual(mp.ticks_diff(top, 0), -1)
+        self.assertEqual(mp.ticks_add(5, -10), top - 4)
+        with self.assertRaises(OverflowError):
+            mp.ticks_add(0, 1 << 29)
+        self.assertTrue(0 <= mp.time.ticks_ms() <= top)
+
+    def test_the_frame_buffer_keeps_the_low_8_bits(self):
+        import busservo_cpython as mp
+
+        buf = mp.bytearray8(4)
+        buf[0] = 0x1234
+        buf[1] = -3
+        buf[2:4] = b"\x01\x02"
+        self.assertEqual(bytes(buf), b"\x34\xfd\x01\x02")
+
+    def test_json_writes_text_as_it_is_as_micropython_does(self):
+        import busservo_cpython as mp
+
+        self.assertEqual(mp.json.dumps({"name": "épaule"}), '{"name": "épaule"}')
+
+
 class Install(Scratch):
     def test_pip_install_gives_the_modules_the_page_and_the_command(self):
         # A copy of the checkout's files (a build writes beside them), into a fresh venv.
