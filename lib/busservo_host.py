@@ -18,6 +18,9 @@ import sys
 import time
 
 BAUDRATE = 9600
+# The command's queries wait this long for an answer: USB adds its latency to the wire's
+# (an adapter's own timer, 16 ms on an FTDI; a busy computer), and a command is no control loop.
+_TIMEOUT_MS = 500
 
 
 def _serial():
@@ -224,11 +227,11 @@ def _check(port):
     bus, _ = _bus(port)
     start = time.monotonic()
     try:
-        mv = bus.read_battery()
+        mv = bus.read_battery(_TIMEOUT_MS)
     except OSError as e:
         if e.errno != errno.ETIMEDOUT:
             raise
-        print("no answer from the controller on %s within 100 ms. Check:" % port)
+        print("no answer from the controller on %s within %d ms. Check:" % (port, _TIMEOUT_MS))
         print("1. the controller is powered: battery charged, switch on, its LED lit")
         print("2. PORT is the controller's (busservo ports; unplug it and look again)")
         print("3. its USB cable carries data (some carry power only)")
@@ -249,7 +252,7 @@ def _positions(port, ids):
     if not ids:
         raise _Usage("positions wants one id or more")
     bus, _ = _bus(port)
-    read = bus.read_positions(ids)
+    read = bus.read_positions(ids, _TIMEOUT_MS)
     for i in ids:
         print("%d: %s" % (i, "no answer" if read[i] is None else read[i]))
     return 1 if None in read.values() else 0
@@ -264,7 +267,7 @@ def _move(port, args):
     position = _int(args[1], "POS", 0, 1000)
     ms = _int(args[2], "MS", 0, 30000)
     bus, simulated = _bus(port)
-    now = bus.read_positions([servo_id])[servo_id]
+    now = bus.read_positions([servo_id], _TIMEOUT_MS)[servo_id]
     if now is None:
         print("servo %d does not answer: its power, the bus cable, its id" % servo_id)
         return 1
@@ -277,7 +280,7 @@ def _move(port, args):
         return 1
     bus.move(servo_id, position, ms)
     time.sleep(ms / 1000 + 0.05)
-    print("servo %d is at %d" % (servo_id, bus.read_positions([servo_id])[servo_id]))
+    print("servo %d is at %d" % (servo_id, bus.read_positions([servo_id], _TIMEOUT_MS)[servo_id]))
     return 0
 
 
@@ -316,7 +319,7 @@ def _panel(port, args):
         },
     )
     ids = [robot.joints[name].servo_id for name in robot.names]
-    print("the servos are at", bus.read_positions(ids))
+    print("the servos are at", bus.read_positions(ids, _TIMEOUT_MS))
     if not (checked or simulated):
         print("nothing moved: the panel moves servos %s; check that they can turn freely," % ids)
         print("then add " + _CHECKED)

@@ -133,18 +133,18 @@ class OnAPty(Scratch):
         self.assertIn("gone (unplugged?)", str(caught.exception))
 
     def test_the_command_checks_reads_and_moves_only_once_told(self):
-        status, out, _ = busservo_command("check", self.link)
-        self.assertEqual(status, 0, out)
+        status, out, err = busservo_command("check", self.link)
+        self.assertEqual(status, 0, out + err)
         self.assertIn("battery: 7.50 V", out)
-        status, out, _ = busservo_command("positions", self.link, 1, 2, 3)
-        self.assertEqual((status, out), (0, "1: 500\n2: 500\n3: 500\n"))
-        status, out, _ = busservo_command("move", self.link, 1, 800, 100)
-        self.assertEqual(status, 1)
+        said = busservo_command("positions", self.link, 1, 2, 3)
+        self.assertEqual(said, (0, "1: 500\n2: 500\n3: 500\n", ""))
+        status, out, err = busservo_command("move", self.link, 1, 800, 100)
+        self.assertEqual(status, 1, out + err)
         self.assertIn("nothing moved", out)
         self.assertIn(CHECKED, out)
-        self.assertEqual(busservo_command("positions", self.link, 1)[1], "1: 500\n")
-        status, out, _ = busservo_command("move", self.link, 1, 800, 100, CHECKED)
-        self.assertEqual(status, 0, out)
+        self.assertEqual(busservo_command("positions", self.link, 1), (0, "1: 500\n", ""))
+        status, out, err = busservo_command("move", self.link, 1, 800, 100, CHECKED)
+        self.assertEqual(status, 0, out + err)
         self.assertIn("servo 1 is at 800", out)
 
     def test_a_port_that_vanishes_mid_command_fails_saying_so(self):
