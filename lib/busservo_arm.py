@@ -23,6 +23,14 @@ import time
 
 import busservo_motion
 
+try:
+    import micropython  # noqa: F401 (on a board; CPython has none)
+
+    _awaitable = None
+except ImportError:  # CPython, on a computer: busservo_cpython gives what it lacks
+    from busservo_cpython import awaitable as _awaitable
+    from busservo_cpython import time
+
 CALIBRATION = "robot.json"  # busservo_board.CALIBRATION: the joints, and the links beside them
 JOINTS = ("base", "shoulder", "elbow", "wrist")
 LINKS = ("base_height", "upper_arm", "forearm", "hand")
@@ -530,6 +538,9 @@ class Line:
         global _asyncio
         if _asyncio is None:
             import asyncio as _asyncio
+
+            if not hasattr(_asyncio, "sleep_ms"):  # CPython: busservo_cpython's has it
+                from busservo_cpython import asyncio as _asyncio
         while not self.done:
             self.step()
             if not self.done:
@@ -540,3 +551,7 @@ class Line:
         return self.run()
 
     __iter__ = __await__
+
+
+if _awaitable:  # CPython: await wants an iterator, not the coroutine MicroPython takes
+    _awaitable(Line)

@@ -30,6 +30,11 @@ import asyncio
 import errno
 import time
 
+try:
+    import micropython  # noqa: F401 (on a board; CPython has none)
+except ImportError:  # CPython, on a computer: busservo_cpython gives what it lacks
+    from busservo_cpython import asyncio, time
+
 import busservo
 from busservo import (
     CMD_ACTION_GROUP_COMPLETE,

@@ -22,8 +22,15 @@ import errno
 import json
 import math
 import time
-from micropython import const
 from struct import pack_into
+
+try:
+    from micropython import const
+
+    _awaitable = None
+except ImportError:  # CPython, on a computer: busservo_cpython gives what it lacks
+    from busservo_cpython import awaitable as _awaitable
+    from busservo_cpython import const, time
 
 BUS = "BUS"  # a bus servo: positions 0..1000 over 240 degrees
 PWM_180 = "PWM_180"  # a PWM servo on an LSC board: 500..2500 us over 180 degrees
@@ -618,6 +625,9 @@ class Player:
         global _asyncio
         if _asyncio is None:
             import asyncio as _asyncio
+
+            if not hasattr(_asyncio, "sleep_ms"):  # CPython: busservo_cpython's has it
+                from busservo_cpython import asyncio as _asyncio
         while not self.done:
             self.step()
             if not self.done:
@@ -630,3 +640,7 @@ class Player:
         return self.run()
 
     __iter__ = __await__
+
+
+if _awaitable:  # CPython: await wants an iterator, not the coroutine MicroPython takes
+    _awaitable(Player)

@@ -36,6 +36,11 @@
 # which a real controller would beep at.
 import time
 
+try:
+    import micropython  # noqa: F401 (on a board; CPython has none)
+except ImportError:  # CPython, on a computer: busservo_cpython gives what it lacks
+    from busservo_cpython import time
+
 from busservo import (
     ALL_GROUPS,
     CMD_ACTION_GROUP_COMPLETE,

@@ -53,6 +53,11 @@ import json
 import os
 import time
 
+try:
+    import micropython  # noqa: F401 (on a board; CPython has none)
+except ImportError:  # CPython, on a computer: busservo_cpython gives what it lacks
+    from busservo_cpython import asyncio, json, time
+
 import busservo_motion as bm
 
 _CLIENTS = 4  # requests being read, and answered, at once

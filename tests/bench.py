@@ -1,10 +1,14 @@
 # busservo's speed and memory, side by side with the vendor's technique, on the
-# MicroPython unix port. Prints Markdown tables. Not a test: machines are noisy,
-# so read the ratios (both sides measured in the same run), not the microseconds.
+# MicroPython unix port, and on CPython (a computer: the same modules, the same calls, in a
+# CPython process this run starts, and six positions read end to end over a pty through
+# pyserial, with the simulated controller at the far end). Prints Markdown tables. Not a test:
+# machines are noisy, so read the ratios (both sides measured in the same run), not the
+# microseconds.
 #
 #   sh boards/unix.sh tests/bench.py                     # the unix port's 2 MB heap
 #   sh boards/unix.sh -X heapsize=128K tests/bench.py    # a board's heap
 #   sh boards/unix.sh tests/bench.py --32bit PATH        # RAM on a 32-bit unix port too
+#   .venv/bin/python tests/bench.py --cpython            # the CPython figures alone
 #
 # Times are means over many calls with the collector left to run when it must,
 # so what a call allocates is paid for, as it is on a board, in collections.
@@ -14,8 +18,13 @@ import os
 import sys
 import time
 
+try:
+    import micropython  # noqa: F401 (the unix port)
+except ImportError:  # CPython: lib/ on the path, and what it lacks (tests/cpython.py)
+    import cpython  # noqa: F401
+
 import busservo
-from shell import MICROPYTHON, scratch, sh
+from shell import MICROPYTHON, PYTHON, scratch, sh
 from test_alloc import CALLS, heap_per_call
 from test_frames import BATTERY_7500, COMPLETE_8_ONCE, POSITIONS_ALL_500, RUN_8_ONCE, STOP
 
@@ -243,6 +252,122 @@ def side_by_side():
     return bare, rows
 
 
+# The calls timed on CPython too, by the names of main()'s rows.
+ON_CPYTHON = (
+    "move",
+    "request_positions, 6 servos",
+    "decode RUN",
+    "decode STOP",
+    "decode COMPLETE",
+    "decode battery",
+    "request and decode 6 positions",
+)
+PTY_READS = 200  # six positions read over the pty, for the median (quick: 10)
+
+
+def cpython_main():
+    # `python tests/bench.py --cpython`: a line per figure, "cpython|NAME|us|vendor us",
+    # then "pty|median ms|fastest ms|reads".
+    uart = ReplayUART()
+    bus = busservo.BusServo(uart)
+    vendor = VendorStyle(uart)
+    ids = (1, 2, 3, 4, 5, 6)
+
+    def best(call):  # the fastest of three rounds: a busy machine slows some
+        return min(us_per_call(call) for _ in range(3))
+
+    def row(name, call, base):
+        print("cpython|%s|%.3f|%.3f" % (name, best(call), best(base)))
+
+    row("move", lambda: bus.move(1, 500, 1000), lambda: vendor.move(1, 500, 1000))
+    row(
+        "request_positions, 6 servos",
+        lambda: bus.request_positions(ids),
+        lambda: vendor.request_positions(ids),
+    )
+    for name, frame in (
+        ("decode RUN", RUN_8_ONCE),
+        ("decode STOP", STOP),
+        ("decode COMPLETE", COMPLETE_8_ONCE),
+        ("decode battery", BATTERY_7500),
+    ):
+        uart.__init__(frame)
+        assert bus.poll() == vendor.poll() == frame[3]
+        row(name, bus.poll, vendor.poll)
+    uart.__init__(POSITIONS_ALL_500)
+
+    def ours():
+        bus.request_positions(ids)
+        return bus.poll()
+
+    def theirs():
+        vendor.request_positions(ids)
+        return vendor.poll()
+
+    assert ours() == theirs() == busservo.CMD_MULT_SERVO_POS_READ
+    row("request and decode 6 positions", ours, theirs)
+    print("pty|%.2f|%.2f|%d" % pty_reads(10 if N < 30000 else PTY_READS))
+
+
+def pty_reads(reads):
+    # Six positions read end to end: busservo_host's port (pyserial) on a pty, the simulated
+    # controller (the unix port, boards/simpty.py) at the far end. (median ms, fastest ms).
+    import subprocess
+
+    import busservo_host
+
+    folder = scratch("pty")
+    os.mkdir(folder)
+    link = folder + "/controller"
+    sim = subprocess.Popen(
+        ["sh", "boards/unix.sh", "--sim-pty", "--link", link],
+        stdout=subprocess.DEVNULL,
+        start_new_session=True,
+    )
+    try:
+        while not os.path.exists(link):
+            time.sleep(0.02)
+        port = busservo_host.serial_port(link)
+        bus = busservo.BusServo(port)
+        for _ in range(20):  # the link comes as the simulator starts: wait for its answer
+            try:
+                bus.read_positions([1, 2, 3, 4, 5, 6], 1000)
+                break
+            except OSError:
+                pass
+        took = []
+        for _ in range(reads):
+            start = time.perf_counter()
+            bus.read_positions([1, 2, 3, 4, 5, 6], 1000)
+            took.append((time.perf_counter() - start) * 1000)
+        port.close()
+    finally:
+        os.killpg(sim.pid, 15)
+        sim.wait()
+        sh("rm -rf " + folder)
+    took.sort()
+    return took[len(took) // 2], took[0], reads
+
+
+def cpython_figures():
+    # The CPython figures, from a CPython process: ({name: (us, vendor us)}, pty figures), or
+    # None if it failed (then why is printed).
+    ok, out = sh(PYTHON + " tests/bench.py --cpython" + (" quick" if N < 30000 else ""))
+    rows = {}
+    pty = None
+    for line in out.split("\n"):
+        cells = line.split("|")
+        if cells[0] == "cpython" and len(cells) == 4:
+            rows[cells[1]] = (float(cells[2]), float(cells[3]))
+        elif cells[0] == "pty" and len(cells) == 4:
+            pty = (float(cells[1]), float(cells[2]), int(cells[3]))
+    if not ok or pty is None:
+        print("the CPython figures failed:\n" + out)
+        return None
+    version = sh(PYTHON + " -c 'import sys; print(sys.version.split()[0])'")[1].strip()
+    return rows, pty, version
+
+
 def main():
     rows = []
     uart = ReplayUART()
@@ -261,6 +386,16 @@ def main():
             cells.append("")
         cells.append("%.3f %%" % (100 * us / wire_us(wire)) if wire else "")
         rows.append(cells)
+        cpython = on_cpython and on_cpython[0].get(name)
+        if cpython:
+            cells.append(
+                "%.2f (vendor-style %.2f), busservo %.1fx"
+                % (cpython[0], cpython[1], cpython[1] / cpython[0])
+            )
+        else:
+            cells.append("")
+
+    on_cpython = cpython_figures()
 
     row("move", lambda: bus.move(1, 500, 1000), lambda: vendor.move(1, 500, 1000), 10)
     row("move_many, 6 servos", lambda: bus.move_many(six, 1000), wire=25)
@@ -303,12 +438,22 @@ def main():
     print()
     print(
         "| call | us per call | heap bytes per call | vendor-style: us (heap bytes), speed-up "
-        "| share of its time on the wire at 9600 baud |"
+        "| share of its time on the wire at 9600 baud | CPython %s: us, speed-up |"
+        % (on_cpython[2] if on_cpython else "")
     )
-    print("| --- | ---: | ---: | ---: | ---: |")
+    print("| --- | ---: | ---: | ---: | ---: | ---: |")
     for cells in rows:
         print("| " + " | ".join(cells) + " |")
     print()
+    if on_cpython:
+        median, fastest, reads = on_cpython[1]
+        print(
+            "Six positions read end to end on CPython (busservo_host's port, pyserial, a pty, "
+            "the simulator at its far end): median %.2f ms, fastest %.2f ms, of %d reads; "
+            "the wire at 9600 baud takes %.2f ms of it (34 bytes)."
+            % (median, fastest, reads, wire_us(34) / 1000)
+        )
+        print()
     if compared:
         bare, pairs = compared
         print("A bare `uart.any()` (a C builtin returning 0): %.3f us" % bare)
@@ -342,4 +487,7 @@ def main():
         )
 
 
-main()
+if "--cpython" in sys.argv:
+    cpython_main()
+else:
+    main()

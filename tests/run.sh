@@ -1,7 +1,8 @@
 #!/bin/sh
 # The test suite: set up the MicroPython unix port (boards/unix.sh), run every tests/test_*.py
 # on it, one process a module and several at once, the seven that look at what loading a .mpy
-# changes (MPY, in this file) again against the .mpy files mpy-cross makes of lib/, check the
+# changes (MPY, in this file) again against the .mpy files mpy-cross makes of lib/, those that
+# the computer's side shares (CPY) again on CPython (tests/cpython.py), check the
 # style and the types, check that the checkout is as it was (no test writes outside a scratch
 # folder of its own), and end with the line "N passed, N failed" (", N skipped" when some
 # were). Exits non-zero if any test failed or any module did not run to its end.
@@ -44,9 +45,19 @@ cd "$(dirname "$0")/.."
 # (busservo_web, and the page it serves, found beside the .mpy).
 # The rest would run the same code again. --mpy-all runs every module against the .mpy too.
 MPY="test_commands test_sim test_async test_motion test_arm test_calibrate test_web"
+# The CPython pass: the same modules run on a computer (lib/busservo_cpython.py gives CPython
+# what it lacks, tests/cpython.py the tests), labelled "(CPython)": the driver's, the
+# simulator's, the wire world's, asyncio's, the motion's, the arm's, the calibration's and the
+# panel's, and test_host (the serial port through pyserial on a pty, the busservo command,
+# pip install .), which runs on CPython only (CPY_ONLY). test_wire and test_soak look at the
+# world's own heap and its MicroPython-style asyncio: not on CPython.
+CPY="test_frames test_commands test_queries test_sim test_reliability test_async test_motion"
+CPY="$CPY test_arm test_calibrate test_web test_host"
+CPY_ONLY="test_host"
 # The longest modules start first, so that the short ones fill the other cores meanwhile and
 # the run ends soon after its longest module does (in the order of their times, measured).
-SLOW="test_soak test_browser test_examples test_web test_reliability test_install test_e2e"
+SLOW="test_soak test_browser test_examples test_web test_host test_reliability test_install"
+SLOW="$SLOW test_e2e"
 SLOW="$SLOW test_scripts test_bench_web test_arm test_docs"
 # The modules on simulated time alone (tests/wire.py's clock: nothing real is waited for) run
 # at a lower priority (nice 10): they lose nothing by waiting for a core, and the modules on
@@ -162,6 +173,14 @@ if selected test_browser; then
     fi
 fi
 
+# pyserial (pinned, as pyproject.toml pins it) for the CPython pass: busservo_host's port.
+for name in $CPY; do
+    if selected "$name"; then
+        pip_install pyserial serial 3.5 "for the computer's serial port" "test_host's port tests"
+        break
+    fi
+done
+
 # resvg-py (a wheel with the resvg renderer compiled in: no system library) lets
 # tests/test_docs.py render the wiring pictures.
 if selected test_docs; then
@@ -181,13 +200,14 @@ note_failure() {
 }
 
 # The jobs, numbered in the order they are printed: the modules against lib/*.py, then
-# against the .mpy files, then the style, then the types.
+# against the .mpy files, then on CPython, then the style, then the types.
 n=0
 add() {  # KIND NAME
     n=$((n + 1))
     eval "kind_$n=$1 name_$n=$2"
 }
 for name in $modules; do
+    case " $CPY_ONLY " in *" $name "*) continue ;; esac
     add py "$name"
 done
 with_mpy=""
@@ -206,6 +226,9 @@ if [ -n "$with_mpy" ]; then
         failed=$((failed + 1))
     fi
 fi
+for name in $modules; do
+    case " $CPY " in *" $name "*) add cpy "$name" ;; esac
+done
 for check in style types; do
     case " $checks " in *" $check "*) add "$check" - ;; esac
 done
@@ -324,6 +347,9 @@ run_job() {
         set -- sh -c ".venv/bin/ruff check -q --no-cache $CODE &&
             .venv/bin/ruff format -q --no-cache --check $CODE"
         ;;
+    cpy)
+        set -- env HOME="$home" TMPDIR="$home" $nice .venv/bin/python tests/cpython.py "$name"
+        ;;
     types) set -- sh tests/typecheck.sh ;;
     esac
     .venv/bin/python -c 'import os, sys
@@ -370,6 +396,7 @@ show() {
         ;;
     py) label="$name:" pass=.py ;;
     mpy) label="$name (.mpy):" pass=.mpy ;;
+    cpy) label="$name (CPython):" pass=CPython ;;
     esac
     # The counts: the snippet's last line, if the module ran to its end (then not shown).
     ran=""

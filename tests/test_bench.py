@@ -14,6 +14,9 @@ class Bench(unittest.TestCase):
             "| poll(), idle | ",
             "| request and decode 6 positions | ",
             "| busservo.mpy (mpy-cross, line numbers kept: as built) | ",
+            "| CPython 3.",  # the CPython column's heading, then its figures
+            "(vendor-style ",
+            "Six positions read end to end on CPython (busservo_host's port, pyserial, a pty",
         ):
             self.assertIn(line, out)
 

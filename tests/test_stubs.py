@@ -202,6 +202,10 @@ def parse(text):
     body = None
     decorators = []
     for indent, s in statements(text):
+        if indent and cls is None and (s.startswith("import ") or s.startswith("from ")):
+            for name in imported(s):  # in a try (what CPython lacks: lib/busservo_cpython.py)
+                found[name] = ("import",)
+            continue
         if not indent:
             cls = None
         elif cls is None or body not in (None, indent):

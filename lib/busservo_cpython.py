@@ -1,0 +1,187 @@
+# busservo_cpython: what busservo's modules use of MicroPython that CPython lacks, so that
+# the same modules run on a computer (CPython 3.9 and later). Only CPython loads it: each
+# module imports it where `import micropython` fails, which never happens on a board.
+#
+#   const(x)            x (MicroPython folds it in at compile time)
+#   time                the time module, with ticks_ms/us/cpu, ticks_add, ticks_diff,
+#                       sleep_ms and sleep_us as MicroPython has them
+#   asyncio             the asyncio package, with sleep_ms, wait_for_ms, and streams
+#                       that have awrite()/aclose() (start_server, open_connection)
+#   json                the json module, whose dumps() writes text as it is, as
+#                       MicroPython's does (not as \u escapes)
+#   bytearray8(n)       a bytearray that keeps the low 8 bits of what it is given
+#   awaitable(cls)      makes `await obj` run obj.run(), as MicroPython's does
+#
+# Ticks wrap at 2**30, as on a 32-bit board: ticks_diff() and ticks_add() are MicroPython's.
+import asyncio as _asyncio
+import json as _json
+import time as _time
+import types
+
+_PERIOD = 1 << 30
+_MASK = _PERIOD - 1
+_HALF = _PERIOD >> 1
+
+
+def const(x):
+    return x
+
+
+class bytearray8(bytearray):
+    """A bytearray that keeps the low 8 bits of an int stored in it, as MicroPython's
+    does (CPython's raises ValueError): the driver stores 16-bit values' low bytes so."""
+
+    __slots__ = ()
+
+    def __setitem__(self, i, value):
+        if type(value) is int:
+            value &= 0xFF
+        bytearray.__setitem__(self, i, value)
+
+
+def _copy(module, name):
+    # A module of the same name with all of module's attributes, to add to.
+    new = types.ModuleType(name)
+    new.__dict__.update((k, v) for k, v in module.__dict__.items() if k[:2] != "__")
+    return new
+
+
+def awaitable(cls):
+    """cls's __await__ returns the coroutine of its run(), which MicroPython's await takes
+    (a coroutine is a generator there); CPython's wants that coroutine's iterator."""
+
+    def __await__(self):
+        return self.run().__await__()
+
+    cls.__await__ = cls.__iter__ = __await__
+    return cls
+
+
+# time, with MicroPython's ticks.
+time = _copy(_time, "time")
+_ns = _time.monotonic_ns
+
+
+def ticks_ms():
+    return _ns() // 1000000 & _MASK
+
+
+def ticks_us():
+    return _ns() // 1000 & _MASK
+
+
+def ticks_diff(end, start):
+    return ((end - start + _HALF) & _MASK) - _HALF
+
+
+def ticks_add(ticks, delta):
+    if not -_HALF < delta < _HALF:
+        raise OverflowError("ticks interval overflow")
+    return (ticks + delta) & _MASK
+
+
+def sleep_ms(ms):
+    if ms > 0:
+        _time.sleep(ms / 1000)
+
+
+def sleep_us(us):
+    if us > 0:
+        _time.sleep(us / 1000000)
+
+
+time.ticks_ms = ticks_ms
+time.ticks_us = ticks_us
+time.ticks_cpu = ticks_us
+time.ticks_diff = ticks_diff
+time.ticks_add = ticks_add
+time.sleep_ms = sleep_ms
+time.sleep_us = sleep_us
+
+
+# json, whose dumps() writes "é" as MicroPython's does, not "\u00e9".
+json = _copy(_json, "json")
+json.dumps = lambda obj: _json.dumps(obj, ensure_ascii=False)
+
+
+# asyncio, with MicroPython's additions.
+asyncio = _copy(_asyncio, "asyncio")
+
+
+async def async_sleep_ms(ms):
+    await _asyncio.sleep(max(ms, 0) / 1000)
+
+
+async def wait_for_ms(aw, ms):
+    return await _asyncio.wait_for(aw, ms / 1000)
+
+
+class Stream:
+    """A connection's reader and writer in one, as MicroPython's asyncio gives it (to
+    both arguments of a start_server() callback): read, readline, readexactly, write
+    then drain, awrite, close then wait_closed, aclose."""
+
+    def __init__(self, reader, writer):
+        self._reader = reader
+        self._writer = writer
+
+    def get_extra_info(self, name, default=None):
+        return self._writer.get_extra_info(name, default)
+
+    async def read(self, n=-1):
+        return await self._reader.read(n)
+
+    async def readline(self):
+        return await self._reader.readline()
+
+    async def readexactly(self, n):
+        return await self._reader.readexactly(n)
+
+    def write(self, data):
+        self._writer.write(data)
+
+    async def drain(self):
+        await self._writer.drain()
+
+    async def awrite(self, data, off=0, sz=-1):
+        if off or sz != -1:
+            data = memoryview(data)[off : None if sz == -1 else off + sz]
+        self._writer.write(data)
+        await self._writer.drain()
+
+    def close(self):
+        self._writer.close()
+
+    async def wait_closed(self):
+        try:
+            await self._writer.wait_closed()
+        except (OSError, _asyncio.CancelledError):
+            pass  # the peer reset it: closed all the same
+
+    async def aclose(self):
+        self.close()
+        await self.wait_closed()
+
+
+_start_server = _asyncio.start_server
+_open_connection = _asyncio.open_connection
+
+
+async def start_server(callback, host, port, backlog=5, ssl=None):
+    def each(reader, writer):
+        stream = Stream(reader, writer)
+        return callback(stream, stream)
+
+    return await _start_server(each, host, port, backlog=backlog, ssl=ssl)
+
+
+async def open_connection(host, port, ssl=None):
+    reader, writer = await _open_connection(host, port, ssl=ssl)
+    stream = Stream(reader, writer)
+    return stream, stream
+
+
+asyncio.sleep_ms = async_sleep_ms
+asyncio.wait_for_ms = wait_for_ms
+asyncio.start_server = start_server
+asyncio.open_connection = open_connection
