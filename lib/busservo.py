@@ -14,10 +14,8 @@ import time
 
 try:
     from micropython import const
-
-    _bytes8 = bytearray  # keeps the low 8 bits of what it is given
 except ImportError:  # CPython, on a computer: busservo_cpython gives what it lacks
-    from busservo_cpython import bytearray8 as _bytes8
+    from busservo_cpython import bytearray8 as bytearray  # keeps the low 8 bits, as here
     from busservo_cpython import const, time
 
 __version__ = "0.1.0"  # as package.json says
@@ -53,7 +51,7 @@ _SLACK_MS = const(50)  # for a UART's transmit buffer to make room, beyond the w
 # Builtins are slow to look up; module globals are quick. The hot paths check
 # their arguments' types with these. (They store 16-bit values' low bytes with
 # no mask: a MicroPython bytearray keeps the low 8 bits of what it is given, and
-# on CPython tx is a _bytes8, which does the same.)
+# on CPython busservo_cpython.bytearray8, which does the same.)
 _type = type
 _int = int
 
@@ -95,7 +93,7 @@ class BusServo:
         self._idle = time.ticks_ms()
         self._frac = 0
         self._cut_at = 0  # bytes of it sent (0: nothing is cut)
-        tx = self._tx = _bytes8(_FRAME_MAX)
+        tx = self._tx = bytearray(_FRAME_MAX)
         tx[0] = tx[1] = _HEADER  # reading never uses tx: it stays
         # Reading: the UART's bytes go through _chunk into rx[_r:_w], where
         # frames are decoded. (readinto() cannot start mid-buffer without a
