@@ -47,6 +47,9 @@
 #        /api/edit {"index", "pose", "ms"}, /api/remove {"index"}, /api/clear,
 #        /api/play {"speed", "loop"}, /api/stop, /api/save {"name"}, /api/load {"name"}
 #   GET  /api/sequences            -> ["name", ...]
+#   POST /api/jog {"axis": "x"|"y"|"z"|"pitch", "by"} (with an arm: mm, or degrees of pitch)
+#   POST /api/calibrate {"step": "start"|"rest"|"nudge"|"check"|"save"|"home"|"cancel"}
+#        ("save" may give "links" {name: mm}; "home" needs "confirm": true)
 # and GET /favicon.ico -> 204, without a login (a browser asks for it before one).
 import asyncio
 import json
@@ -73,6 +76,12 @@ _FOLDER = "sequences"
 _NAME_MAX = 24
 _MS_DEFAULT = 1000  # time to reach an added pose, if the request gives none
 _HALT_MS = 100  # a sequence stopped mid-pose: the joints go where they are, in this
+_CALIBRATION = "robot.json"  # busservo_board.CALIBRATION: the joints, and an arm's links
+_JOG_MM_S = 40  # a jog's straight line: the tool point's speed
+_JOG_MAX = 100  # mm (or degrees of pitch) a jog may go at once
+_AXES = ("x", "y", "z", "pitch")
+_CAL_READ_MS = 100  # positions read this often while a calibration sweeps or is nudged
+_HOME_DPS = 30  # the home after a calibration: slowly
 _NAME_CHARS = "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_"
 
 
@@ -154,6 +163,7 @@ _FAILED = (
     b'\r\n\r\n{"error": "the panel could not answer (out of memory?): try again"}'
 )
 _EMPTY = b"HTTP/1.0 204 No Content\r\n\r\n"
+_POSITIONS = 21  # busservo.CMD_MULT_SERVO_POS_READ: a reply of positions
 
 
 def _name(body):
@@ -305,16 +315,19 @@ class Panel:
     """The panel's state, its loop and its HTTP side, for serve(); a test may drive one
     directly."""
 
-    def __init__(self, robot, password):
+    def __init__(self, robot, password, arm=None, path=_CALIBRATION):
         if type(password) is not str or len(password) < 8:
             # Why, never the password itself: the message may end up in a log or on a screen.
             got = type(password).__name__
             if got == "str":
                 got = "%d characters" % len(password)
             raise ValueError("password must be a str of 8 or more characters, got " + got)
-        self.robot = robot
+        if arm is not None and arm.robot is not robot:
+            raise ValueError("arm must be an Arm on robot, the robot the panel drives")
+        self.path = path  # the calibration file: an arm's links, and where a calibration goes
         self.bus = robot.bus
-        self._ids = [robot.joints[name].servo_id for name in robot.names]
+        self.robots = 0  # robots the panel has had: the page reads the joints again when it grows
+        self._adopt(robot, arm)
         self._password = password.encode()
         self._sessions = []  # [token, ticks_ms last seen], oldest first
         self.armed = None  # the token of the page that armed, or None
@@ -326,6 +339,11 @@ class Panel:
         self.limp = False  # joints let go by limp() or estop(), until the next move
         self._orders = 0  # bumped by each order: a halt or an arm begun before one is void
         self._halting = None  # the task that halts a sequence stopped mid-pose
+        self._line = None  # a jog's busservo_arm.Line on its way
+        self._jog = None  # [x, y, z, pitch] the jogs have reached, while _jogged == _orders
+        self._jogged = -1
+        self.cal = None  # a busservo_calibrate.Calibration under way, and its step and news
+        self._cal = None  # {"step", "seen", "why"}
         self._asking = asyncio.Lock()  # one query of the panel's on the bus at a time
         now = time.ticks_ms()
         self._seen = time.ticks_add(now, -_OPEN_MS)  # any page, last
@@ -334,6 +352,29 @@ class Panel:
         # requests are being answered.
         self._reading = []
         self._clients = 0
+
+    def _adopt(self, robot, arm=None):
+        # Drive robot (a new one: a calibration saved); its arm given, else the one its
+        # calibration file's links make (busservo_arm imported only then), else none.
+        self.robot = robot
+        self._ids = [robot.joints[name].servo_id for name in robot.names]
+        self.to = {}  # {name: degrees} the page or a jog last sent each joint towards
+        self.robots += 1
+        self.no_arm = None  # why there is no arm to jog, if the file's links do not make one
+        if arm is None:
+            try:
+                with open(self.path) as f:
+                    links = "links" in json.load(f)
+            except (OSError, ValueError, TypeError):
+                links = False  # no calibration file (yet), or not one of ours
+            if links:
+                import busservo_arm
+
+                try:
+                    arm = busservo_arm.Arm.load(robot, self.path)
+                except (ValueError, TypeError) as e:
+                    self.no_arm = str(e)
+        self.arm = arm
 
     # Sessions.
 
@@ -369,23 +410,43 @@ class Panel:
         while the loop, the stream and the other pages go on."""
         robot = self.robot
         names = robot.names if names is None else names
-        ids = [robot.joints[name].servo_id for name in names]
+        return await self._ask([robot.joints[name].servo_id for name in names], robot.where, names)
+
+    async def _ask(self, ids, then, *args):
+        # then(*args) once ids' positions have come through ask(): then() reads them with
+        # robot.bus.read_positions() as they came, rather than ask the controller again.
+        robot = self.robot
         async with self._asking:
             for _ in self.bus.ask(ids):
                 await asyncio.sleep_ms(_ASK_MS)
             robot.bus = _Known(self.bus.positions)
             try:
-                return robot.where(names)
+                return then(*args)
             finally:
                 robot.bus = self.bus
+
+    async def _positions(self):
+        # {servo_id: position} of every joint, read now without blocking.
+        return await self._ask(
+            self._ids, lambda: {i: self.bus.positions.get(i) for i in self._ids}
+        )
 
     # What the page can do.
 
     def disarm(self, halt=True):
-        """Stop driving: the stream ends (the joints hold) and the sequence stops."""
+        """Stop driving: the stream ends (the joints hold), a jog and the sequence stop, and
+        a calibration is given up (its joints stay limp)."""
         self.armed = None
-        self.robot.hold()
+        self._still()
+        self.cal = None
         self.stop(halt)
+
+    def _still(self):
+        # End the stream and a jog's line: each joint stops at the last target sent.
+        if self._line:
+            self._line.stop()
+            self._line = None
+        self.robot.hold()
 
     def stop(self, halt=True):
         """Stop the sequence; with halt, its pose on the way too (which would go on for
@@ -413,6 +474,7 @@ class Panel:
     def estop(self):
         self.disarm(halt=False)  # at once: the joints go limp
         self.limp = True
+        self.to = {}
         self.robot.estop()
 
     def _failed(self, e):
@@ -437,21 +499,31 @@ class Panel:
     def _not_playing(self):
         if self.player:
             raise _Refused(409, "a sequence is playing: stop it first")
+        self._calibrating()
+
+    def _calibrating(self):
+        if self.cal:
+            raise _Refused(409, "a calibration is under way: finish or cancel it first")
 
     def _target(self, token, targets):
         self._driver(token)
         self._not_playing()
         targets = self._pose(targets, "targets")
         self._orders += 1
+        if self._line:
+            self._still()  # the slider takes over from a jog
         self.robot.stream(targets)
+        self.to.update(targets)
         self.limp = False
 
     def _play(self, token, speed, loop):
         self._driver(token)
         if not self.sequence.steps:
             raise _Refused(409, "the sequence is empty: add poses first")
+        self._calibrating()
         self._orders += 1
-        self.robot.hold()
+        self._still()
+        self.to = {}
         self.player = self.sequence.play(self.robot, speed, loop)
         self.limp = False
 
@@ -467,8 +539,17 @@ class Panel:
         player = self.player
         if self.error and time.ticks_diff(time.ticks_ms(), self._error_at) > _ERROR_MS:
             self.error = None  # over: it has not happened again for a while
+        tool = None
+        if self.arm and None not in at:
+            tool = [round(v, 1) for v in self.arm.point(dict(zip(robot.names, at)))]
+        cal = self._cal if self.cal else None
         return {
             "at": at,
+            "to": [self.to.get(name) for name in robot.names],
+            "tool": tool,  # the arm's tool point where the joints are: x, y, z mm, pitch
+            "jog": self._jog if self._jogged == self._orders else None,
+            "cal": cal,
+            "robots": self.robots,
             "battery": self.bus.battery,
             "armed": self.armed is not None,
             "mine": token is not None and self.armed == token,
@@ -497,14 +578,27 @@ class Panel:
 
     def _tick(self):
         bus = self.bus
-        while bus.poll() is not None:  # replies update bus.positions and bus.battery
-            pass
+        read = False
+        while True:  # replies update bus.positions and bus.battery
+            cmd = bus.poll()
+            if cmd is None:
+                break
+            read = read or cmd == _POSITIONS
         now = time.ticks_ms()
         if self.armed is not None:
             for token, seen in self._sessions:
                 if token == self.armed and time.ticks_diff(now, seen) > _DEAD_MS:
                     self.disarm()
+            line = self._line
+            if line:
+                if line.done:
+                    self._line = None
+                else:
+                    line.step()  # streams the line's next point, and sends it when it can
             self.robot.step()
+        cal = self.cal
+        if cal and read and self._cal["step"] in ("sweep", "nudge"):
+            self._feel(cal, {i: bus.positions.get(i) for i in cal.ids})
         if self.player:
             if self.player.done:
                 self.player = None
@@ -513,7 +607,8 @@ class Panel:
         if bus.wire_ms() or self._asking.locked():
             return  # the stream, the player and a route's query come first
         open_ = time.ticks_diff(now, self._seen) < _OPEN_MS
-        if time.ticks_diff(now, self._read) >= (_READ_MS if open_ else _OPEN_MS):
+        every = (_CAL_READ_MS if self.cal else _READ_MS) if open_ else _OPEN_MS
+        if time.ticks_diff(now, self._read) >= every:
             self._read = now
             bus.request_positions(self._ids)
         elif open_ and time.ticks_diff(now, self._battery) >= _BATTERY_MS:
@@ -680,6 +775,7 @@ class Panel:
         self.disarm(halt=False)  # limp stops every joint, even with no controller
         self.robot.limp()
         self.limp = True
+        self.to = {}
         return self.state(token)
 
     async def _post_capture(self, body, token):
@@ -773,11 +869,157 @@ class Panel:
         self.edits += 1
         return self.state(token)
 
+    # Jog: the arm's tool point a step along x, y, z (mm) or its pitch (degrees), in a
+    # straight line at _JOG_MM_S, streamed as a slider is (the dead-man and STOP end it).
 
-async def serve(robot, password, port=80):
+    async def _post_jog(self, body, token):
+        self._driver(token)
+        self._not_playing()
+        arm = self.arm
+        if arm is None:
+            why = self.no_arm or "no links in %s: calibrate, and give the links" % self.path
+            raise _Refused(409, "no arm to jog: " + why)
+        axis = body.get("axis")
+        if axis not in _AXES:
+            raise _Refused(400, "axis must be one of %s, got %r" % (", ".join(_AXES), axis))
+        by = _need(body, "by", float, -_JOG_MAX, _JOG_MAX)
+        orders = self._orders
+        goal = self._jog
+        if self._jogged != orders:  # something else moved the arm: start from where it is
+            goal = list(await self._ask(self._ids, arm.where))
+            if self._orders != orders:
+                raise _Refused(409, "stopped, or moved otherwise, while reading: jog again")
+        goal = list(goal)
+        goal[_AXES.index(axis)] += by
+        try:
+            line = arm.line_to(goal[0], goal[1], goal[2], goal[3], mm_s=_JOG_MM_S)
+        except ValueError as e:  # out of reach, or past a joint's limits: nothing is sent
+            raise _Refused(409, "cannot jog there: %s" % e)
+        self._orders += 1
+        if self._line:
+            self._line.stop()
+        self.robot.hold()
+        self._line = line
+        self._jog = goal
+        self._jogged = self._orders
+        self.to.update(arm.pose(goal[0], goal[1], goal[2], goal[3]))
+        self.limp = False
+        return self.state(token)
+
+    # A calibration by hand (busservo_calibrate, imported only then), a step a request;
+    # the positions it needs read as all others are, without waiting on the wire.
+
+    async def _post_calibrate(self, body, token):
+        self._driver(token)
+        step = body.get("step")
+        cal = self.cal
+        news = self._cal
+        if step == "start":
+            if self.player:
+                raise _Refused(409, "a sequence is playing: stop it first")
+            import busservo_calibrate
+
+            robot = self.robot
+            ids = {}
+            kinds = {}
+            for name in robot.names:
+                joint = robot.joints[name]
+                ids[name] = joint.servo_id
+                if joint.kind != bm.BUS:
+                    kinds[name] = joint.kind
+            cal = busservo_calibrate.Calibration(self.bus, ids, kinds)
+            self._orders += 1
+            self._still()
+            self.to = {}
+            cal.limp()  # every joint: the person holds the arm
+            self.limp = True
+            self.cal = cal
+            self._cal = {"step": "rest", "seen": None, "why": None, "joints": None}
+            return self.state(token)
+        if step == "cancel":
+            self.cal = None  # nothing saved; the joints stay as they are (limp)
+            return self.state(token)
+        after = {"rest": "rest", "nudge": "sweep", "check": "nudge", "save": "check"}
+        after["home"] = "saved"
+        if step not in after:
+            raise _Refused(
+                400, "step must be start, %s or cancel, got %r" % (", ".join(after), step)
+            )
+        if cal is None:
+            raise _Refused(409, "no calibration under way: start one")
+        if news["step"] != after[step]:
+            raise _Refused(
+                409, "the calibration is at its %s step, not %s's" % (news["step"], after[step])
+            )
+        news["why"] = None
+        if step == "rest":
+            cal.rest(await self._positions())
+            news["step"] = "sweep"
+        elif step == "nudge":
+            news["step"] = "nudge"  # the sweep's reads so far are its range
+        elif step == "check":
+            if not self._feel(cal, await self._positions()):
+                raise _Refused(504, news["why"][""])
+            problems = cal.problems()
+            if problems:
+                news["why"] = problems
+                said = ["%s: %s" % (n, problems[n]) for n in cal.names if n in problems]
+                raise _Refused(409, "cannot calibrate " + "; ".join(said))
+            joints = cal.joints()
+            news["joints"] = [
+                [joints[n].trim, joints[n].direction, joints[n].lo, joints[n].hi]
+                for n in cal.names
+            ]
+            news["step"] = "check"
+        elif step == "save":
+            links = body.get("links")
+            if links is None and self.arm:
+                links = self.arm.links  # the arm's, kept
+            try:
+                robot = cal.save(self.path, links)
+            except ValueError as e:
+                raise _Refused(400, str(e))
+            except OSError as e:  # the board's filesystem
+                raise _Refused(500, "could not save %s: %r" % (self.path, e))
+            self._adopt(robot)
+            news["step"] = "saved"  # limp still: nothing moves until the home is confirmed
+        else:
+            if body.get("confirm") is not True:
+                raise _Refused(400, 'home moves the arm: send "confirm": true')
+            orders = self._orders
+            await self.where()  # where the limp joints were left: the home's distances
+            if self._orders != orders or self.cal is not cal:
+                raise _Refused(409, "stopped while reading: home again")
+            robot = self.robot
+            pose = {n: min(max(0, j.lo), j.hi) for n, j in robot.joints.items()}
+            robot.move(pose, dps=_HOME_DPS)
+            self.to = pose
+            self.limp = False
+            self.cal = None
+        return self.state(token)
+
+    def _feel(self, cal, positions):
+        # A read for a step that reads again and again (the sweep, the nudge): its news. A
+        # servo that does not answer is named, and the next read may do.
+        news = self._cal
+        try:
+            if news["step"] == "sweep":
+                got = cal.sample(positions)
+            else:
+                got = cal.nudge(positions)
+        except (OSError, ValueError) as e:
+            news["why"] = {"": str(e)}
+            return False
+        news["seen"] = [got[n] for n in cal.names]
+        return True
+
+
+async def serve(robot, password, port=80, arm=None, path=_CALIBRATION):
     """Serve the panel for robot on port, on every interface, until cancelled.
-    password: a str of 8 or more characters, which the page asks for."""
-    panel = Panel(robot, password)
+    password: a str of 8 or more characters, which the page asks for. arm: a
+    busservo_arm.Arm on robot to jog (default: the one path's links make, if it has them);
+    path: the calibration file, which the calibration page writes."""
+    panel = Panel(robot, password, arm, path)
     try:
         os.stat(_PAGE)
     except OSError:
