@@ -368,10 +368,12 @@ class Panel:
             except (OSError, ValueError, TypeError):
                 links = False  # no calibration file (yet), or not one of ours
             if links:
-                import busservo_arm
-
                 try:
+                    import busservo_arm
+
                     arm = busservo_arm.Arm.load(robot, self.path)
+                except ImportError:
+                    self.no_arm = "busservo_arm is missing: install it beside busservo_web"
                 except (ValueError, TypeError) as e:
                     self.no_arm = str(e)
         self.arm = arm
@@ -546,7 +548,8 @@ class Panel:
         return {
             "at": at,
             "to": [self.to.get(name) for name in robot.names],
-            "tool": tool,  # the arm's tool point where the joints are: x, y, z mm, pitch
+            "arm": self.arm is not None,  # an arm to jog
+            "tool": tool,  # its tool point where the joints are: x, y, z mm, pitch
             "jog": self._jog if self._jogged == self._orders else None,
             "cal": cal,
             "robots": self.robots,
@@ -917,8 +920,11 @@ class Panel:
         if step == "start":
             if self.player:
                 raise _Refused(409, "a sequence is playing: stop it first")
-            import busservo_calibrate
-
+            try:
+                import busservo_calibrate
+            except ImportError:
+                why = "busservo_calibrate is missing: install it beside busservo_web"
+                raise _Refused(500, why)
             robot = self.robot
             ids = {}
             kinds = {}

@@ -74,7 +74,9 @@ class MipWeb(unittest.TestCase):
                 sorted(os.listdir(target)),
                 [
                     "busservo.mpy",
+                    "busservo_arm.mpy",  # the panel's jog
                     "busservo_board.mpy",  # examples/web_panel.py finds board.py through it
+                    "busservo_calibrate.mpy",  # its calibration page
                     "busservo_motion.mpy",
                     "busservo_web.html.gz",
                     "busservo_web.mpy",

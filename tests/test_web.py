@@ -226,6 +226,8 @@ class Package(Tidy):
                 "mpy/busservo.mpy",
                 "mpy/busservo_board.mpy",
                 "mpy/busservo_motion.mpy",
+                "mpy/busservo_arm.mpy",  # the panel's jog, imported only with an arm's links
+                "mpy/busservo_calibrate.mpy",  # its calibration page, imported only then
                 "mpy/busservo_web.mpy",
             ],
         )
