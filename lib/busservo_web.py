@@ -77,11 +77,7 @@ _NAME_MAX = 24
 _MS_DEFAULT = 1000  # time to reach an added pose, if the request gives none
 _HALT_MS = 100  # a sequence stopped mid-pose: the joints go where they are, in this
 _CALIBRATION = "robot.json"  # busservo_board.CALIBRATION: the joints, and an arm's links
-_JOG_MM_S = 40  # a jog's straight line: the tool point's speed
-_JOG_MAX = 100  # mm (or degrees of pitch) a jog may go at once
-_AXES = ("x", "y", "z", "pitch")
 _CAL_READ_MS = 100  # positions read this often while a calibration sweeps or is nudged
-_HOME_DPS = 30  # the home after a calibration: slowly
 _NAME_CHARS = "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_"
 
 
@@ -315,6 +311,15 @@ class Panel:
     """The panel's state, its loop and its HTTP side, for serve(); a test may drive one
     directly."""
 
+    # The jog's and the calibration's, here until they are used (a panel without an arm
+    # keeps its instances' RAM): busservo_web_arm sets them.
+    no_arm = None  # why there is no arm to jog, if the file's links make none
+    _line = None  # a jog's busservo_arm.Line on its way
+    _jog = None  # [x, y, z, pitch] the jogs have reached, while _jogged == _orders
+    _jogged = -1
+    cal = None  # a busservo_calibrate.Calibration under way
+    _cal = None  # its news: {"step", "seen", "why", "joints"}
+
     def __init__(self, robot, password, arm=None, path=_CALIBRATION):
         if type(password) is not str or len(password) < 8:
             # Why, never the password itself: the message may end up in a log or on a screen.
@@ -339,11 +344,6 @@ class Panel:
         self.limp = False  # joints let go by limp() or estop(), until the next move
         self._orders = 0  # bumped by each order: a halt or an arm begun before one is void
         self._halting = None  # the task that halts a sequence stopped mid-pose
-        self._line = None  # a jog's busservo_arm.Line on its way
-        self._jog = None  # [x, y, z, pitch] the jogs have reached, while _jogged == _orders
-        self._jogged = -1
-        self.cal = None  # a busservo_calibrate.Calibration under way, and its step and news
-        self._cal = None  # {"step", "seen", "why"}
         self._asking = asyncio.Lock()  # one query of the panel's on the bus at a time
         now = time.ticks_ms()
         self._seen = time.ticks_add(now, -_OPEN_MS)  # any page, last
@@ -360,7 +360,6 @@ class Panel:
         self._ids = [robot.joints[name].servo_id for name in robot.names]
         self.to = {}  # {name: degrees} the page or a jog last sent each joint towards
         self.robots += 1
-        self.no_arm = None  # why there is no arm to jog, if the file's links do not make one
         if arm is None:
             try:
                 with open(self.path) as f:
@@ -368,14 +367,7 @@ class Panel:
             except (OSError, ValueError, TypeError):
                 links = False  # no calibration file (yet), or not one of ours
             if links:
-                try:
-                    import busservo_arm
-
-                    arm = busservo_arm.Arm.load(robot, self.path)
-                except ImportError:
-                    self.no_arm = "busservo_arm is missing: install it beside busservo_web"
-                except (ValueError, TypeError) as e:
-                    self.no_arm = str(e)
+                arm, self.no_arm = _arm_part().arm(robot, self.path)
         self.arm = arm
 
     # Sessions.
@@ -412,26 +404,15 @@ class Panel:
         while the loop, the stream and the other pages go on."""
         robot = self.robot
         names = robot.names if names is None else names
-        return await self._ask([robot.joints[name].servo_id for name in names], robot.where, names)
-
-    async def _ask(self, ids, then, *args):
-        # then(*args) once ids' positions have come through ask(): then() reads them with
-        # robot.bus.read_positions() as they came, rather than ask the controller again.
-        robot = self.robot
+        ids = [robot.joints[name].servo_id for name in names]
         async with self._asking:
             for _ in self.bus.ask(ids):
                 await asyncio.sleep_ms(_ASK_MS)
             robot.bus = _Known(self.bus.positions)
             try:
-                return then(*args)
+                return robot.where(names)
             finally:
                 robot.bus = self.bus
-
-    async def _positions(self):
-        # {servo_id: position} of every joint, read now without blocking.
-        return await self._ask(
-            self._ids, lambda: {i: self.bus.positions.get(i) for i in self._ids}
-        )
 
     # What the page can do.
 
@@ -541,18 +522,8 @@ class Panel:
         player = self.player
         if self.error and time.ticks_diff(time.ticks_ms(), self._error_at) > _ERROR_MS:
             self.error = None  # over: it has not happened again for a while
-        tool = None
-        if self.arm and None not in at:
-            tool = [round(v, 1) for v in self.arm.point(dict(zip(robot.names, at)))]
-        cal = self._cal if self.cal else None
-        return {
+        out = {
             "at": at,
-            "to": [self.to.get(name) for name in robot.names],
-            "arm": self.arm is not None,  # an arm to jog
-            "tool": tool,  # its tool point where the joints are: x, y, z mm, pitch
-            "jog": self._jog if self._jogged == self._orders else None,
-            "cal": cal,
-            "robots": self.robots,
             "battery": self.bus.battery,
             "armed": self.armed is not None,
             "mine": token is not None and self.armed == token,
@@ -563,6 +534,14 @@ class Panel:
             "updates": robot.updates,
             "error": self.error,
         }
+        # Only what there is: the panel without an arm answers as small as it did before.
+        if self.to:
+            out["to"] = [self.to.get(name) for name in robot.names]
+        if self.robots > 1:
+            out["robots"] = self.robots
+        if self.arm or self.cal:
+            _arm_part().state(self, out, at)
+        return out
 
     # The loop: the bus's replies, the stream, the player, the dead-man and the reads.
 
@@ -592,16 +571,11 @@ class Panel:
             for token, seen in self._sessions:
                 if token == self.armed and time.ticks_diff(now, seen) > _DEAD_MS:
                     self.disarm()
-            line = self._line
-            if line:
-                if line.done:
-                    self._line = None
-                else:
-                    line.step()  # streams the line's next point, and sends it when it can
+            if self._line:
+                _arm_part().step(self)  # a jog: its line's next point, sent when it can be
             self.robot.step()
-        cal = self.cal
-        if cal and read and self._cal["step"] in ("sweep", "nudge"):
-            self._feel(cal, {i: bus.positions.get(i) for i in cal.ids})
+        if self.cal and read:
+            _arm_part().feel(self)  # the positions just read: the sweep's, or the nudge's
         if self.player:
             if self.player.done:
                 self.player = None
@@ -872,152 +846,20 @@ class Panel:
         self.edits += 1
         return self.state(token)
 
-    # Jog: the arm's tool point a step along x, y, z (mm) or its pitch (degrees), in a
-    # straight line at _JOG_MM_S, streamed as a slider is (the dead-man and STOP end it).
+    # The arm's routes, in busservo_web_arm (imported then): POST /api/jog, /api/calibrate.
 
     async def _post_jog(self, body, token):
-        self._driver(token)
-        self._not_playing()
-        arm = self.arm
-        if arm is None:
-            why = self.no_arm or "no links in %s: calibrate, and give the links" % self.path
-            raise _Refused(409, "no arm to jog: " + why)
-        axis = body.get("axis")
-        if axis not in _AXES:
-            raise _Refused(400, "axis must be one of %s, got %r" % (", ".join(_AXES), axis))
-        by = _need(body, "by", float, -_JOG_MAX, _JOG_MAX)
-        orders = self._orders
-        goal = self._jog
-        if self._jogged != orders:  # something else moved the arm: start from where it is
-            goal = list(await self._ask(self._ids, arm.where))
-            if self._orders != orders:
-                raise _Refused(409, "stopped, or moved otherwise, while reading: jog again")
-        goal = list(goal)
-        goal[_AXES.index(axis)] += by
-        try:
-            line = arm.line_to(goal[0], goal[1], goal[2], goal[3], mm_s=_JOG_MM_S)
-        except ValueError as e:  # out of reach, or past a joint's limits: nothing is sent
-            raise _Refused(409, "cannot jog there: %s" % e)
-        self._orders += 1
-        if self._line:
-            self._line.stop()
-        self.robot.hold()
-        self._line = line
-        self._jog = goal
-        self._jogged = self._orders
-        self.to.update(arm.pose(goal[0], goal[1], goal[2], goal[3]))
-        self.limp = False
-        return self.state(token)
-
-    # A calibration by hand (busservo_calibrate, imported only then), a step a request;
-    # the positions it needs read as all others are, without waiting on the wire.
+        return await _arm_part().jog(self, body, token)
 
     async def _post_calibrate(self, body, token):
-        self._driver(token)
-        step = body.get("step")
-        cal = self.cal
-        news = self._cal
-        if step == "start":
-            if self.player:
-                raise _Refused(409, "a sequence is playing: stop it first")
-            try:
-                import busservo_calibrate
-            except ImportError:
-                why = "busservo_calibrate is missing: install it beside busservo_web"
-                raise _Refused(500, why)
-            robot = self.robot
-            ids = {}
-            kinds = {}
-            for name in robot.names:
-                joint = robot.joints[name]
-                ids[name] = joint.servo_id
-                if joint.kind != bm.BUS:
-                    kinds[name] = joint.kind
-            cal = busservo_calibrate.Calibration(self.bus, ids, kinds)
-            self._orders += 1
-            self._still()
-            self.to = {}
-            cal.limp()  # every joint: the person holds the arm
-            self.limp = True
-            self.cal = cal
-            self._cal = {"step": "rest", "seen": None, "why": None, "joints": None}
-            return self.state(token)
-        if step == "cancel":
-            self.cal = None  # nothing saved; the joints stay as they are (limp)
-            return self.state(token)
-        after = {"rest": "rest", "nudge": "sweep", "check": "nudge", "save": "check"}
-        after["home"] = "saved"
-        if step not in after:
-            raise _Refused(
-                400, "step must be start, %s or cancel, got %r" % (", ".join(after), step)
-            )
-        if cal is None:
-            raise _Refused(409, "no calibration under way: start one")
-        if news["step"] != after[step]:
-            raise _Refused(
-                409, "the calibration is at its %s step, not %s's" % (news["step"], after[step])
-            )
-        news["why"] = None
-        if step == "rest":
-            cal.rest(await self._positions())
-            news["step"] = "sweep"
-        elif step == "nudge":
-            news["step"] = "nudge"  # the sweep's reads so far are its range
-        elif step == "check":
-            if not self._feel(cal, await self._positions()):
-                raise _Refused(504, news["why"][""])
-            problems = cal.problems()
-            if problems:
-                news["why"] = problems
-                said = ["%s: %s" % (n, problems[n]) for n in cal.names if n in problems]
-                raise _Refused(409, "cannot calibrate " + "; ".join(said))
-            joints = cal.joints()
-            news["joints"] = [
-                [joints[n].trim, joints[n].direction, joints[n].lo, joints[n].hi]
-                for n in cal.names
-            ]
-            news["step"] = "check"
-        elif step == "save":
-            links = body.get("links")
-            if links is None and self.arm:
-                links = self.arm.links  # the arm's, kept
-            try:
-                robot = cal.save(self.path, links)
-            except ValueError as e:
-                raise _Refused(400, str(e))
-            except OSError as e:  # the board's filesystem
-                raise _Refused(500, "could not save %s: %r" % (self.path, e))
-            self._adopt(robot)
-            news["step"] = "saved"  # limp still: nothing moves until the home is confirmed
-        else:
-            if body.get("confirm") is not True:
-                raise _Refused(400, 'home moves the arm: send "confirm": true')
-            orders = self._orders
-            await self.where()  # where the limp joints were left: the home's distances
-            if self._orders != orders or self.cal is not cal:
-                raise _Refused(409, "stopped while reading: home again")
-            robot = self.robot
-            pose = {n: min(max(0, j.lo), j.hi) for n, j in robot.joints.items()}
-            robot.move(pose, dps=_HOME_DPS)
-            self.to = pose
-            self.limp = False
-            self.cal = None
-        return self.state(token)
+        return await _arm_part().calibrate(self, body, token)
 
-    def _feel(self, cal, positions):
-        # A read for a step that reads again and again (the sweep, the nudge): its news. A
-        # servo that does not answer is named, and the next read may do.
-        news = self._cal
-        try:
-            if news["step"] == "sweep":
-                got = cal.sample(positions)
-            else:
-                got = cal.nudge(positions)
-        except (OSError, ValueError) as e:
-            news["why"] = {"": str(e)}
-            return False
-        news["seen"] = [got[n] for n in cal.names]
-        return True
+
+def _arm_part():
+    # The jog and the calibration page: their module, imported when first used.
+    import busservo_web_arm
+
+    return busservo_web_arm
 
 
 async def serve(robot, password, port=80, arm=None, path=_CALIBRATION):

@@ -639,7 +639,7 @@ class ArmPanel(Browsing):
         self.open_and_log_in()
         self.arm()
         self.jog("jog-y+", 25)  # 25 mm at 40 mm/s: 0.6 s
-        self.assertIsNotNone(until(lambda: panel_state()["jog"] is not None, 1.0))
+        self.assertIsNotNone(until(lambda: panel_state().get("jog") is not None, 1.0))
         self.press("stop")
         self.assertIsNotNone(until(lambda: controller()["limp"] == [1, 2, 3, 4], 1.0))
         frozen = controller()["at"]

@@ -80,6 +80,7 @@ class MipWeb(unittest.TestCase):
                     "busservo_motion.mpy",
                     "busservo_web.html.gz",
                     "busservo_web.mpy",
+                    "busservo_web_arm.mpy",  # its jog and calibration page
                 ],
             )
             use = (
