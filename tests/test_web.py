@@ -1388,6 +1388,10 @@ async def calibrate(port, world, token, until_step="check", still=()):
 
 
 class Calibrating(Tidy):
+    def test_the_loop_knows_a_positions_reply_by_the_drivers_own_command(self):
+        # (busservo_web names it without importing busservo: its value, checked here)
+        self.assertEqual(busservo_web._POSITIONS, CMD_MULT_SERVO_POS_READ)
+
     def test_the_calibration_page_calibrates_saves_and_homes_only_once_confirmed(self):
         async def scenario(port, world, robot, path):
             token = await login(port)
