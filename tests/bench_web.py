@@ -255,8 +255,8 @@ def stall(seconds, pages=True, use=None):
     async def main():
         busservo_web.Panel.__init__ = keep
         server = asyncio.create_task(busservo_web.serve(robot, PASSWORD, port, arm))
-        busservo_web.Panel.__init__ = new
         await asyncio.sleep_ms(100)
+        busservo_web.Panel.__init__ = new
         first = await web_world.login(port, PASSWORD)
         second = await web_world.login(port, PASSWORD)
         stop = []
