@@ -211,7 +211,7 @@ class Browsing(unittest.TestCase):
 
     def drag(self, name, dx, release=True):
         """Drag joint name's slider's thumb dx pixels from its middle: its value after."""
-        s = self.slider(name)
+        s = self.in_view(self.slider(name))
         actions = ActionChains(self.browser).click_and_hold(s)
         for _ in range(5):
             actions.move_by_offset(dx // 5, 0).pause(0.05)
@@ -219,6 +219,13 @@ class Browsing(unittest.TestCase):
             actions.release()
         actions.perform()
         return float(s.get_attribute("value"))
+
+    def in_view(self, element):
+        """element, scrolled to the middle of the screen: scrolled into view at its top (as a
+        drag's press scrolls it), a slider is under the page's sticky title bar, which takes
+        the press (the page is taller than the phone's screen)."""
+        self.browser.execute_script("arguments[0].scrollIntoView({block: 'center'})", element)
+        return element
 
     def press(self, element_id):
         self.browser.find_element(By.ID, element_id).click()
@@ -235,7 +242,7 @@ class Browsing(unittest.TestCase):
 
     def move_base_to(self, degrees):
         """Drag the base's slider to about degrees; its value, once the servo is there."""
-        s = self.slider("base")
+        s = self.in_view(self.slider("base"))
         here = float(s.get_attribute("value"))
         ActionChains(self.browser).click_and_hold(s).move_by_offset(
             round((degrees - here) / 240 * s.size["width"]), 0
@@ -249,7 +256,7 @@ class Browsing(unittest.TestCase):
 
     def add_pose_at(self, degrees):
         """Drag the base to about degrees, wait until it is there, add it to the sequence."""
-        s = self.slider("base")
+        s = self.in_view(self.slider("base"))
         ActionChains(self.browser).click_and_hold(s).move_by_offset(
             round(degrees / 240 * s.size["width"]), 0
         ).release().perform()

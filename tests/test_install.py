@@ -383,6 +383,7 @@ class Manifest(unittest.TestCase):
                 "lib/busservo_board.py",
                 "lib/busservo_motion.py",
                 "lib/busservo_web.py",
+                "lib/busservo_web_arm.py",  # its jog and calibration page
             ],
         )
         named, meta = self.run_manifest(arm=True, calibration=True)  # both on the motion layer
