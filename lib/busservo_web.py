@@ -81,23 +81,23 @@ _CAL_READ_MS = 100  # positions read this often while a calibration sweeps or is
 _NAME_CHARS = "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_"
 
 
-def _find_page():
-    # The page: beside this module (installed by mip or mpremote, or on the unix port),
-    # else in /lib (a module frozen into the firmware has no folder on the filesystem).
+# The page: beside this module (installed by mip or mpremote, or on the unix port), else in
+# /lib (a module frozen into the firmware has no folder on the filesystem). Found here, at
+# import, rather than by a function: the module's own code goes once it has run, and the RAM
+# it took is the robot program's.
+try:
+    _PAGE = __file__.rpartition("/")[0] or "."
+except NameError:
+    _PAGE = "/lib"
+for _folder in (_PAGE, "/lib"):
     try:
-        here = __file__.rpartition("/")[0] or "."
-    except NameError:
-        here = "/lib"
-    for folder in (here, "/lib"):
-        try:
-            os.stat(folder + "/busservo_web.html.gz")
-            return folder + "/busservo_web.html.gz"
-        except OSError:
-            pass
-    return here + "/busservo_web.html.gz"  # not there: serve() says so
-
-
-_PAGE = _find_page()
+        os.stat(_folder + "/busservo_web.html.gz")
+        _PAGE = _folder
+        break
+    except OSError:
+        pass
+del _folder
+_PAGE += "/busservo_web.html.gz"  # not there: serve() says so
 
 
 def _same(given, secret):
@@ -328,11 +328,21 @@ class Panel:
                 got = "%d characters" % len(password)
             raise ValueError("password must be a str of 8 or more characters, got " + got)
         if arm is not None and arm.robot is not robot:
-            raise ValueError("arm must be an Arm on robot, the robot the panel drives")
+            raise ValueError("arm must be an Arm on robot")
         self.path = path  # the calibration file: an arm's links, and where a calibration goes
+        self.robot = robot
         self.bus = robot.bus
-        self.robots = 0  # robots the panel has had: the page reads the joints again when it grows
-        self._adopt(robot, arm)
+        self._ids = [robot.joints[name].servo_id for name in robot.names]
+        self.to = {}  # {name: degrees} the page or a jog last sent each joint towards
+        self.robots = 1  # robots the panel has had (a calibration saved gives it another)
+        if arm is None:  # the arm its calibration file's links make, if it has links
+            try:
+                with open(path) as f:
+                    if '"links"' in f.read():
+                        arm = _arm_part().arm(self, robot)  # (busservo_arm imported then)
+            except OSError:
+                pass  # no calibration file (yet)
+        self.arm = arm
         self._password = password.encode()
         self._sessions = []  # [token, ticks_ms last seen], oldest first
         self.armed = None  # the token of the page that armed, or None
@@ -352,23 +362,6 @@ class Panel:
         # requests are being answered.
         self._reading = []
         self._clients = 0
-
-    def _adopt(self, robot, arm=None):
-        # Drive robot (a new one: a calibration saved); its arm given, else the one its
-        # calibration file's links make (busservo_arm imported only then), else none.
-        self.robot = robot
-        self._ids = [robot.joints[name].servo_id for name in robot.names]
-        self.to = {}  # {name: degrees} the page or a jog last sent each joint towards
-        self.robots += 1
-        if arm is None:
-            try:
-                with open(self.path) as f:
-                    links = "links" in json.load(f)
-            except (OSError, ValueError, TypeError):
-                links = False  # no calibration file (yet), or not one of ours
-            if links:
-                arm, self.no_arm = _arm_part().arm(robot, self.path)
-        self.arm = arm
 
     # Sessions.
 
@@ -467,6 +460,8 @@ class Panel:
     def _driver(self, token):
         if self.armed != token:
             raise _Refused(409, "arm the panel first (another page may have it armed)")
+        if self.cal:  # nothing moves but the calibration's home
+            raise _Refused(409, "a calibration is under way: finish or cancel it first")
 
     def _pose(self, pose, what):
         # A pose {joint: degrees}, checked: known joints, within their limits.
@@ -482,11 +477,6 @@ class Panel:
     def _not_playing(self):
         if self.player:
             raise _Refused(409, "a sequence is playing: stop it first")
-        self._calibrating()
-
-    def _calibrating(self):
-        if self.cal:
-            raise _Refused(409, "a calibration is under way: finish or cancel it first")
 
     def _target(self, token, targets):
         self._driver(token)
@@ -503,7 +493,6 @@ class Panel:
         self._driver(token)
         if not self.sequence.steps:
             raise _Refused(409, "the sequence is empty: add poses first")
-        self._calibrating()
         self._orders += 1
         self._still()
         self.to = {}
@@ -524,6 +513,8 @@ class Panel:
             self.error = None  # over: it has not happened again for a while
         out = {
             "at": at,
+            "to": [self.to.get(name) for name in robot.names] if self.to else None,
+            "robots": self.robots,  # the page reads the joints again when this grows
             "battery": self.bus.battery,
             "armed": self.armed is not None,
             "mine": token is not None and self.armed == token,
@@ -534,12 +525,7 @@ class Panel:
             "updates": robot.updates,
             "error": self.error,
         }
-        # Only what there is: the panel without an arm answers as small as it did before.
-        if self.to:
-            out["to"] = [self.to.get(name) for name in robot.names]
-        if self.robots > 1:
-            out["robots"] = self.robots
-        if self.arm or self.cal:
+        if self.arm or self.cal:  # only then: a panel without an arm answers as before
             _arm_part().state(self, out, at)
         return out
 

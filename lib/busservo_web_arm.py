@@ -17,16 +17,27 @@ AXES = ("x", "y", "z", "pitch")
 HOME_DPS = 30  # the home after a calibration: slowly
 
 
-def arm(robot, path):
-    """(the Arm that path's links make on robot, None), or (None, why not)."""
+def arm(panel, robot):
+    """The Arm that the links in panel.path make on robot, or None, and why in panel.no_arm."""
+    panel.no_arm = None
     try:
         import busservo_arm
 
-        return busservo_arm.Arm.load(robot, path), None
+        return busservo_arm.Arm.load(robot, panel.path)
     except ImportError:
-        return None, "busservo_arm is missing: install it beside busservo_web"
+        panel.no_arm = "busservo_arm is missing: install it beside busservo_web"
     except (ValueError, TypeError) as e:
-        return None, str(e)
+        panel.no_arm = str(e)
+    return None
+
+
+def _adopt(panel, robot):
+    # Drive robot, the calibration just saved, and the arm its file's links make, if any.
+    panel.robot = robot
+    panel._ids = [robot.joints[name].servo_id for name in robot.names]
+    panel.to = {}
+    panel.robots += 1
+    panel.arm = arm(panel, robot)
 
 
 def state(panel, out, at):
@@ -107,7 +118,8 @@ async def jog(panel, body, token):
 
 
 async def calibrate(panel, body, token):
-    panel._driver(token)
+    if panel.armed != token:  # (not _driver(): it refuses while a calibration is under way)
+        raise web._Refused(409, "arm the panel first (another page may have it armed)")
     step = body.get("step")
     cal = panel.cal
     news = panel._cal
@@ -180,7 +192,7 @@ async def calibrate(panel, body, token):
             raise web._Refused(400, str(e))
         except OSError as e:  # the board's filesystem
             raise web._Refused(500, "could not save %s: %r" % (panel.path, e))
-        panel._adopt(robot)
+        _adopt(panel, robot)
         news["step"] = "saved"  # limp still: nothing moves until the home is confirmed
     else:
         if body.get("confirm") is not True:
