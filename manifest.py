@@ -5,7 +5,8 @@
 # arm=True freezes the arm in millimetres (busservo_arm) and calibration=True the calibration by
 # hand (busservo_calibrate), each with the motion layer they stand on.
 # web=True freezes the web panel (busservo_web) too; it needs its page copied to the board's
-# /lib: mpremote cp lib/busservo_web.html.gz :/lib/
+# /lib: mpremote cp lib/busservo_web.html.gz :/lib/ (its jog needs arm=True, its calibration
+# page calibration=True)
 metadata(
     description="Driver for the serial Bus Servo Controller (LOBOT/Hiwonder, 0x55 0x55 frames).",
     version="0.1.0",
@@ -22,6 +23,7 @@ if options.motion or options.web or options.arm or options.calibration:
     module("busservo_motion.py", base_path="lib")
 if options.web:
     module("busservo_web.py", base_path="lib")
+    module("busservo_web_arm.py", base_path="lib")  # its jog and calibration page
 if options.arm:
     module("busservo_arm.py", base_path="lib")
 if options.calibration:

@@ -2,7 +2,9 @@
 # Drive servos 1..4 from a phone: a slider a joint, live positions, the battery, teach and
 # play back, and a STOP button (or Esc) that lets every joint go limp. Nothing moves until
 # you arm the page; if the page goes quiet for a second (tab closed, Wi-Fi gone), the joints
-# hold where they are.
+# hold where they are. Its calibration page calibrates the arm by hand and saves robot.json,
+# which this example loads the next time; with an arm's links in it (joints base, shoulder,
+# elbow and wrist: docs/panel.md), the page also jogs the arm's tool point in millimetres.
 #
 # On a board with Wi-Fi (ESP32, Pico W): its board.py gives uart() and, to join your
 # network, WIFI = ("network name", "its password"); without WIFI the board starts its own

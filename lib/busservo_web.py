@@ -47,6 +47,9 @@
 #        /api/edit {"index", "pose", "ms"}, /api/remove {"index"}, /api/clear,
 #        /api/play {"speed", "loop"}, /api/stop, /api/save {"name"}, /api/load {"name"}
 #   GET  /api/sequences            -> ["name", ...]
+#   POST /api/jog {"axis": "x"|"y"|"z"|"pitch", "by"} (with an arm: mm, or degrees of pitch)
+#   POST /api/calibrate {"step": "start"|"rest"|"nudge"|"check"|"save"|"home"|"cancel"}
+#        ("save" may give "links" {name: mm}; "home" needs "confirm": true)
 # and GET /favicon.ico -> 204, without a login (a browser asks for it before one).
 import asyncio
 import json
@@ -78,26 +81,28 @@ _FOLDER = "sequences"
 _NAME_MAX = 24
 _MS_DEFAULT = 1000  # time to reach an added pose, if the request gives none
 _HALT_MS = 100  # a sequence stopped mid-pose: the joints go where they are, in this
+_CALIBRATION = "robot.json"  # busservo_board.CALIBRATION: the joints, and an arm's links
+_CAL_READ_MS = 100  # positions read this often while a calibration sweeps or is nudged
 _NAME_CHARS = "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_"
 
 
-def _find_page():
-    # The page: beside this module (installed by mip or mpremote, or on the unix port),
-    # else in /lib (a module frozen into the firmware has no folder on the filesystem).
+# The page: beside this module (installed by mip or mpremote, or on the unix port), else in
+# /lib (a module frozen into the firmware has no folder on the filesystem). Found here, at
+# import, rather than by a function: the module's own code goes once it has run, and the RAM
+# it took is the robot program's.
+try:
+    _PAGE = __file__.rpartition("/")[0] or "."
+except NameError:
+    _PAGE = "/lib"
+for _folder in (_PAGE, "/lib"):
     try:
-        here = __file__.rpartition("/")[0] or "."
-    except NameError:
-        here = "/lib"
-    for folder in (here, "/lib"):
-        try:
-            os.stat(folder + "/busservo_web.html.gz")
-            return folder + "/busservo_web.html.gz"
-        except OSError:
-            pass
-    return here + "/busservo_web.html.gz"  # not there: serve() says so
-
-
-_PAGE = _find_page()
+        os.stat(_folder + "/busservo_web.html.gz")
+        _PAGE = _folder
+        break
+    except OSError:
+        pass
+del _folder
+_PAGE += "/busservo_web.html.gz"  # not there: serve() says so
 
 
 def _same(given, secret):
@@ -159,6 +164,7 @@ _FAILED = (
     b'\r\n\r\n{"error": "the panel could not answer (out of memory?): try again"}'
 )
 _EMPTY = b"HTTP/1.0 204 No Content\r\n\r\n"
+_POSITIONS = 21  # busservo.CMD_MULT_SERVO_POS_READ: a reply of positions
 
 
 def _name(body):
@@ -288,17 +294,6 @@ async def _page(conn, head):
             await conn.write(view[:n])
 
 
-class _Known:
-    # Stands in for the bus inside robot.where(), which reads with read_positions():
-    # the positions the panel has just read with ask(), so that where() need not ask
-    # again (and block). busservo_motion has no query that does not block.
-    def __init__(self, positions):
-        self.positions = positions
-
-    def read_positions(self, ids, timeout_ms=None):
-        return {i: self.positions[i] for i in ids}
-
-
 async def _close(writer):
     try:
         await writer.aclose()
@@ -310,16 +305,38 @@ class Panel:
     """The panel's state, its loop and its HTTP side, for serve(); a test may drive one
     directly."""
 
-    def __init__(self, robot, password):
+    # The jog's and the calibration's, here until they are used (a panel without an arm
+    # keeps its instances' RAM): busservo_web_arm sets them.
+    no_arm = None  # why there is no arm to jog, if the file's links make none
+    _line = None  # a jog's busservo_arm.Line on its way
+    _jog = None  # [x, y, z, pitch] the jogs have reached, while _jogged == _orders
+    _jogged = -1
+    cal = None  # a busservo_calibrate.Calibration under way
+    _cal = None  # its news: {"step", "seen", "why", "joints"}
+
+    def __init__(self, robot, password, arm=None, path=_CALIBRATION):
         if type(password) is not str or len(password) < 8:
             # Why, never the password itself: the message may end up in a log or on a screen.
             got = type(password).__name__
             if got == "str":
                 got = "%d characters" % len(password)
             raise ValueError("password must be a str of 8 or more characters, got " + got)
+        if arm is not None and arm.robot is not robot:
+            raise ValueError("arm must be an Arm on robot")
+        self.path = path  # the calibration file: an arm's links, and where a calibration goes
         self.robot = robot
         self.bus = robot.bus
         self._ids = [robot.joints[name].servo_id for name in robot.names]
+        self.to = {}  # {name: degrees} the page or a jog last sent each joint towards
+        self.robots = 1  # robots the panel has had (a calibration saved gives it another)
+        if arm is None:  # the arm its calibration file's links make, if it has links
+            try:
+                with open(path) as f:
+                    if '"links"' in f.read():
+                        arm = _arm_part().arm(self, robot)  # (busservo_arm imported then)
+            except OSError:
+                pass  # no calibration file (yet)
+        self.arm = arm
         self._password = password.encode()
         self._sessions = []  # [token, ticks_ms last seen], oldest first
         self.armed = None  # the token of the page that armed, or None
@@ -378,19 +395,24 @@ class Panel:
         async with self._asking:
             for _ in self.bus.ask(ids):
                 await asyncio.sleep_ms(_ASK_MS)
-            robot.bus = _Known(self.bus.positions)
-            try:
-                return robot.where(names)
-            finally:
-                robot.bus = self.bus
+            return robot.where(names, self.bus.positions)  # what came: it does not ask again
 
     # What the page can do.
 
     def disarm(self, halt=True):
-        """Stop driving: the stream ends (the joints hold) and the sequence stops."""
+        """Stop driving: the stream ends (the joints hold), a jog and the sequence stop, and
+        a calibration is given up (its joints stay limp)."""
         self.armed = None
-        self.robot.hold()
+        self._still()
+        self.cal = None
         self.stop(halt)
+
+    def _still(self):
+        # End the stream and a jog's line: each joint stops at the last target sent.
+        if self._line:
+            self._line.stop()
+            self._line = None
+        self.robot.hold()
 
     def stop(self, halt=True):
         """Stop the sequence; with halt, its pose on the way too (which would go on for
@@ -418,6 +440,7 @@ class Panel:
     def estop(self):
         self.disarm(halt=False)  # at once: the joints go limp
         self.limp = True
+        self.to = {}
         self.robot.estop()
 
     def _failed(self, e):
@@ -427,6 +450,8 @@ class Panel:
     def _driver(self, token):
         if self.armed != token:
             raise _Refused(409, "arm the panel first (another page may have it armed)")
+        if self.cal:  # nothing moves but the calibration's home
+            raise _Refused(409, "a calibration is under way: finish or cancel it first")
 
     def _pose(self, pose, what):
         # A pose {joint: degrees}, checked: known joints, within their limits.
@@ -448,7 +473,10 @@ class Panel:
         self._not_playing()
         targets = self._pose(targets, "targets")
         self._orders += 1
+        if self._line:
+            self._still()  # the slider takes over from a jog
         self.robot.stream(targets)
+        self.to.update(targets)
         self.limp = False
 
     def _play(self, token, speed, loop):
@@ -456,7 +484,8 @@ class Panel:
         if not self.sequence.steps:
             raise _Refused(409, "the sequence is empty: add poses first")
         self._orders += 1
-        self.robot.hold()
+        self._still()
+        self.to = {}
         self.player = self.sequence.play(self.robot, speed, loop)
         self.limp = False
 
@@ -472,8 +501,10 @@ class Panel:
         player = self.player
         if self.error and time.ticks_diff(time.ticks_ms(), self._error_at) > _ERROR_MS:
             self.error = None  # over: it has not happened again for a while
-        return {
+        out = {
             "at": at,
+            "to": [self.to.get(name) for name in robot.names] if self.to else None,
+            "robots": self.robots,  # the page reads the joints again when this grows
             "battery": self.bus.battery,
             "armed": self.armed is not None,
             "mine": token is not None and self.armed == token,
@@ -484,6 +515,9 @@ class Panel:
             "updates": robot.updates,
             "error": self.error,
         }
+        if self.arm or self.cal:  # only then: a panel without an arm answers as before
+            _arm_part().state(self, out, at)
+        return out
 
     # The loop: the bus's replies, the stream, the player, the dead-man and the reads.
 
@@ -502,14 +536,22 @@ class Panel:
 
     def _tick(self):
         bus = self.bus
-        while bus.poll() is not None:  # replies update bus.positions and bus.battery
-            pass
+        read = False
+        while True:  # replies update bus.positions and bus.battery
+            cmd = bus.poll()
+            if cmd is None:
+                break
+            read = read or cmd == _POSITIONS
         now = time.ticks_ms()
         if self.armed is not None:
             for token, seen in self._sessions:
                 if token == self.armed and time.ticks_diff(now, seen) > _DEAD_MS:
                     self.disarm()
+            if self._line:
+                _arm_part().step(self)  # a jog: its line's next point, sent when it can be
             self.robot.step()
+        if self.cal and read:
+            _arm_part().feel(self)  # the positions just read: the sweep's, or the nudge's
         if self.player:
             if self.player.done:
                 self.player = None
@@ -518,7 +560,8 @@ class Panel:
         if bus.wire_ms() or self._asking.locked():
             return  # the stream, the player and a route's query come first
         open_ = time.ticks_diff(now, self._seen) < _OPEN_MS
-        if time.ticks_diff(now, self._read) >= (_READ_MS if open_ else _OPEN_MS):
+        every = (_CAL_READ_MS if self.cal else _READ_MS) if open_ else _OPEN_MS
+        if time.ticks_diff(now, self._read) >= every:
             self._read = now
             bus.request_positions(self._ids)
         elif open_ and time.ticks_diff(now, self._battery) >= _BATTERY_MS:
@@ -685,6 +728,7 @@ class Panel:
         self.disarm(halt=False)  # limp stops every joint, even with no controller
         self.robot.limp()
         self.limp = True
+        self.to = {}
         return self.state(token)
 
     async def _post_capture(self, body, token):
@@ -778,11 +822,28 @@ class Panel:
         self.edits += 1
         return self.state(token)
 
+    # The arm's routes, in busservo_web_arm (imported then): POST /api/jog, /api/calibrate.
 
-async def serve(robot, password, port=80):
+    async def _post_jog(self, body, token):
+        return await _arm_part().jog(self, body, token)
+
+    async def _post_calibrate(self, body, token):
+        return await _arm_part().calibrate(self, body, token)
+
+
+def _arm_part():
+    # The jog and the calibration page: their module, imported when first used.
+    import busservo_web_arm
+
+    return busservo_web_arm
+
+
+async def serve(robot, password, port=80, arm=None, path=_CALIBRATION):
     """Serve the panel for robot on port, on every interface, until cancelled.
-    password: a str of 8 or more characters, which the page asks for."""
-    panel = Panel(robot, password)
+    password: a str of 8 or more characters, which the page asks for. arm: a
+    busservo_arm.Arm on robot to jog (default: the one path's links make, if it has them);
+    path: the calibration file, which the calibration page writes."""
+    panel = Panel(robot, password, arm, path)
     try:
         os.stat(_PAGE)
     except OSError:

@@ -156,16 +156,24 @@ def latency(joints, samples):
     return found
 
 
-def stall(seconds, pages=True):
+def stall(seconds, pages=True, use=None):
     """(the event loop's longest stall, the panel loop's longest gap between two ticks, how
     many poses were captured), in ms, while one page captures poses and adds them to the
     sequence, and another, armed, streams a slider and polls the state as an open page
     does (without pages: the panel and its world alone, the floor of the figure on this
-    machine). A blocking query stalls both for its round trip."""
+    machine). A blocking query stalls both for its round trip. use "jog": an arm instead,
+    the armed page jogging it back and forth; "calibrate": the armed page calibrating it
+    while hands sweep its limp joints (the third figure: jogs, or positions reads)."""
     import busservo_web
 
     world = web_world.live()
     robot = web_world.robot(world)
+    arm = None
+    if use:
+        import busservo_arm
+
+        robot = bm.Robot(robot.bus, ARM)  # bent at the servos' 500: a tool point to jog
+        arm = busservo_arm.Arm(robot, LINKS)
     port = free_port()
     worst = [0, 0, 0]  # us: the event loop's, the panel's ticks'; captures
     tick = busservo_web.Panel._tick
@@ -205,13 +213,57 @@ def stall(seconds, pages=True):
                 await http(port, "GET", "/api/state", token=token)
             await asyncio.sleep_ms(30)
 
+    async def poller(token, stop):  # an open page
+        while not stop:
+            await web_world.http(port, "GET", "/api/state", token=token)
+            await asyncio.sleep_ms(200)
+
+    async def jogger(token, stop):
+        http = web_world.http
+        await http(port, "POST", "/api/arm", {"on": True}, token)
+        k = 0
+        while not stop:
+            k += 1
+            body = {"axis": "y", "by": 10 if k % 2 else -10}  # 250 ms at 40 mm/s
+            status, reply = await http(port, "POST", "/api/jog", body, token)
+            worst[2] += status == 200
+            await http(port, "GET", "/api/state", token=token)
+            await asyncio.sleep_ms(200)
+
+    async def calibrator(token, stop):
+        http = web_world.http
+        await http(port, "POST", "/api/arm", {"on": True}, token)
+        await http(port, "POST", "/api/calibrate", {"step": "start"}, token)
+        await asyncio.sleep_ms(50)
+        await http(port, "POST", "/api/calibrate", {"step": "rest"}, token)
+        k = 0
+        while not stop:  # the sweep: hands turn each joint, the page polls
+            k += 1
+            for i in (1, 2, 3, 4):
+                world.sim.turn(i, 300 + (k * 37 + i * 101) % 400)
+            await http(port, "GET", "/api/state", token=token)
+            await asyncio.sleep_ms(150)
+        worst[2] = panel[0].cal.samples
+
+    panel = []
+    new = busservo_web.Panel.__init__
+
+    def keep(self, *args):
+        new(self, *args)
+        panel.append(self)
+
     async def main():
-        server = asyncio.create_task(busservo_web.serve(robot, PASSWORD, port))
+        busservo_web.Panel.__init__ = keep
+        server = asyncio.create_task(busservo_web.serve(robot, PASSWORD, port, arm))
         await asyncio.sleep_ms(100)
+        busservo_web.Panel.__init__ = new
         first = await web_world.login(port, PASSWORD)
         second = await web_world.login(port, PASSWORD)
         stop = []
         tasks = [streamer(second, stop), capturer(first, stop)] if pages else []
+        if use:
+            tasks = [jogger if use == "jog" else calibrator, poller]
+            tasks = [tasks[0](first, stop), tasks[1](second, stop)]
         tasks = [asyncio.create_task(t) for t in tasks]
         await asyncio.sleep_ms(200)  # armed and streaming
         last_tick[0] = None
@@ -232,6 +284,17 @@ def stall(seconds, pages=True):
         busservo_web.Panel._tick = tick
         busservo.time = bm.time = time
     return worst[0] / 1000, worst[1] / 1000, worst[2]
+
+
+# The arm the stall figures jog and calibrate, as tests/browser.py's: bent where the servos
+# are at 500.
+ARM = {
+    "base": bm.Joint(1),
+    "shoulder": bm.Joint(2, trim=-30, limits=(-60, 90)),
+    "elbow": bm.Joint(3, trim=-60, limits=(-30, 120)),
+    "wrist": bm.Joint(4, trim=-60, limits=(-30, 120)),
+}
+LINKS = {"base_height": 70, "upper_arm": 105, "forearm": 98, "hand": 60}
 
 
 def install(form):
@@ -408,6 +471,15 @@ def main(quick=False):
         " a frame's decode (the ticks: %d ms apart) |"
         % (busy[2], busy[0], busy[1], idle[0], idle[1], 10)
     )
+    for use, what, did in (
+        ("jog", "the armed page jogging the arm, another polling", "jogs"),
+        ("calibrate", "the armed page calibrating, hands sweeping", "sweep reads"),
+    ):
+        busy = sorted(stall(seconds, use=use) for _ in range(runs))[runs // 2]
+        print(
+            "| longest stall, %s | the event loop %.1f ms, the panel's ticks %.1f ms apart"
+            " (%d %s) | a frame's decode |" % (what, busy[0], busy[1], busy[2], did)
+        )
     if MICROPYTHON32:
         for form, how in (("mpy", "as mip installs it (.mpy)"), ("py", "from source (.py)")):
             smallest, failed = heaps(form)

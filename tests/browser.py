@@ -23,6 +23,7 @@ try:
     from selenium.webdriver.common.action_chains import ActionChains
     from selenium.webdriver.common.by import By
     from selenium.webdriver.common.keys import Keys
+    from selenium.webdriver.support.ui import Select
 except ImportError:
     webdriver = None  # main() says so, and skips
 
@@ -102,8 +103,18 @@ def position(degrees):
     return round(500 + degrees * 25 / 6)
 
 
-class Panel(unittest.TestCase):
+def turn(*pairs):
+    """The person's hands turn limp servos: turn((servo_id, position), ...)."""
+    path = "".join("/%d/%d" % pair for pair in pairs)
+    with urllib.request.urlopen("http://127.0.0.1:%d/turn%s" % (PROBE, path), timeout=5) as r:
+        return json.load(r)
+
+
+class Browsing(unittest.TestCase):
+    """The panel on web_world.py, in a browser; a subclass's tests use it."""
+
     server = None
+    calibration = ()  # web_world.py's --calibration PATH, if any
 
     @classmethod
     def setUpClass(cls):
@@ -121,6 +132,7 @@ class Panel(unittest.TestCase):
                 PASSWORD,
                 "--probe",
                 str(PROBE),
+                *cls.calibration,
             ],
             stdout=log,
             stderr=subprocess.STDOUT,
@@ -199,7 +211,7 @@ class Panel(unittest.TestCase):
 
     def drag(self, name, dx, release=True):
         """Drag joint name's slider's thumb dx pixels from its middle: its value after."""
-        s = self.slider(name)
+        s = self.in_view(self.slider(name))
         actions = ActionChains(self.browser).click_and_hold(s)
         for _ in range(5):
             actions.move_by_offset(dx // 5, 0).pause(0.05)
@@ -207,6 +219,13 @@ class Panel(unittest.TestCase):
             actions.release()
         actions.perform()
         return float(s.get_attribute("value"))
+
+    def in_view(self, element):
+        """element, scrolled to the middle of the screen: scrolled into view at its top (as a
+        drag's press scrolls it), a slider is under the page's sticky title bar, which takes
+        the press (the page is taller than the phone's screen)."""
+        self.browser.execute_script("arguments[0].scrollIntoView({block: 'center'})", element)
+        return element
 
     def press(self, element_id):
         self.browser.find_element(By.ID, element_id).click()
@@ -223,7 +242,7 @@ class Panel(unittest.TestCase):
 
     def move_base_to(self, degrees):
         """Drag the base's slider to about degrees; its value, once the servo is there."""
-        s = self.slider("base")
+        s = self.in_view(self.slider("base"))
         here = float(s.get_attribute("value"))
         ActionChains(self.browser).click_and_hold(s).move_by_offset(
             round((degrees - here) / 240 * s.size["width"]), 0
@@ -237,7 +256,7 @@ class Panel(unittest.TestCase):
 
     def add_pose_at(self, degrees):
         """Drag the base to about degrees, wait until it is there, add it to the sequence."""
-        s = self.slider("base")
+        s = self.in_view(self.slider("base"))
         ActionChains(self.browser).click_and_hold(s).move_by_offset(
             round(degrees / 240 * s.size["width"]), 0
         ).release().perform()
@@ -250,8 +269,8 @@ class Panel(unittest.TestCase):
         )
         return value
 
-    # The tests.
 
+class Panel(Browsing):
     def test_1_nothing_moves_when_the_page_loads_or_logs_in(self):
         before = controller()
         self.open_and_log_in()
@@ -492,6 +511,197 @@ class Panel(unittest.TestCase):
         time.sleep(1.0)  # the page, and whatever the browser asks for beside it
         refused = [e["message"] for e in b.get_log("browser") if " 401 " in e["message"]]
         self.assertEqual(refused, [])
+
+    # The panel as a new user read it (issue 21): is a number the target or the joint?
+
+    def test_14_each_slider_shows_its_limits_its_target_and_where_the_joint_is(self):
+        b = self.browser
+        self.open_and_log_in()
+        self.assertFalse(b.find_element(By.ID, "jogbox").is_displayed())  # no arm: no jog
+        claw = self.slider("claw").find_element(By.XPATH, "../..")
+        self.assertEqual(claw.find_element(By.CLASS_NAME, "lim").text.split(), ["0°", "60°"])
+        self.arm()
+        value = self.drag("base", 80)
+        base = self.slider("base").find_element(By.XPATH, "../..")
+        label = base.find_element(By.TAG_NAME, "span")
+        self.assertIsNotNone(until(lambda: "→ %.1f" % value in label.text), label.text)
+        self.assertIsNotNone(until(lambda: self.reached(1, value), 6.0))
+
+        def live():  # the label's "at", and the mark on the track, where the board read it
+            at = panel_state()["at"][0]
+            # The mark's middle, as a share of the thumb's way along the track (16 px wide).
+            shown = self.browser.execute_script(
+                """
+                const s = arguments[0].getBoundingClientRect();
+                const m = arguments[0].nextSibling.getBoundingClientRect();
+                return (m.x + m.width / 2 - s.x - 8) / (s.width - 16);
+                """,
+                self.slider("base"),
+            )
+            return label.text.startswith("at %.1f " % at) and abs(shown - (at + 120) / 240) < 0.01
+
+        self.assertIsNotNone(until(live), label.text)
+
+    def test_15_a_pose_is_listed_in_the_joints_order(self):
+        b = self.browser
+        self.open_and_log_in()
+        self.arm()
+        self.press("clear")
+        self.assertIsNotNone(until(lambda: self.step_count() == 0))
+        self.move_base_to(30)
+        self.press("capture")
+        self.assertIsNotNone(until(lambda: b.find_elements(By.ID, "p-base")))
+        shown = [e.get_attribute("id") for e in b.find_elements(By.CSS_SELECTOR, "#pose input")]
+        self.assertEqual(shown, ["p-base", "p-shoulder", "p-elbow", "p-claw"])
+        self.press("add")
+        self.assertIsNotNone(until(lambda: self.step_count() == 1))
+        words = self.text("steps").split()
+        names = [w for w in words if w in ("base", "shoulder", "elbow", "claw")]
+        self.assertEqual(names, ["base", "shoulder", "elbow", "claw"], words)
+
+
+# An arm to jog and calibrate: base, shoulder, elbow and wrist on servos 1..4, with the links
+# of its calibration file (a scratch one: the page's calibration saves there). Its trims put
+# the arm bent where the simulated servos start (500): shoulder 30, elbow 60, wrist 60.
+ARM = {
+    "joints": {
+        "base": {"servo_id": 1},
+        "shoulder": {"servo_id": 2, "trim": -30, "limits": [-60, 90]},
+        "elbow": {"servo_id": 3, "trim": -60, "limits": [-30, 120]},
+        "wrist": {"servo_id": 4, "trim": -60, "limits": [-30, 120]},
+    },
+    "links": {"base_height": 70, "upper_arm": 105, "forearm": 98, "hand": 60},
+}
+# The person's hands: each servo's position at the rest pose, at the two ends of its safe
+# range, and nudged.
+HANDS = {1: (512, 140, 880, 560), 2: (488, 200, 800, 440), 3: (500, 150, 860, 545)}
+HANDS[4] = (530, 180, 880, 480)
+
+
+class ArmPanel(Browsing):
+    @classmethod
+    def setUpClass(cls):
+        cls.file = _fresh_dir() + "/robot.json"
+        with open(cls.file, "w") as f:
+            json.dump(ARM, f)
+        cls.calibration = ("--calibration", cls.file)
+        super().setUpClass()
+
+    def jog(self, button, step):
+        Select(self.browser.find_element(By.ID, "jogstep")).select_by_visible_text(str(step))
+        self.press(button)
+
+    def hands(self, k, only=(1, 2, 3, 4)):
+        turn(*[(i, HANDS[i][k]) for i in only])
+
+    def calibrate(self, still=()):
+        """Start a calibration, and do its three steps by hand (the servos in still not
+        swept); the last button pressed: Nudged."""
+        self.press("calgo")  # Start calibration
+        self.assertIsNotNone(until(lambda: controller()["limp"] == [1, 2, 3, 4]))
+        self.hands(0)
+        self.assertIsNotNone(until(lambda: self.text("calgo") == "Rest pose held"))
+        time.sleep(0.3)
+        self.press("calgo")
+        self.assertIsNotNone(until(lambda: self.text("calgo") == "Ranges done"))
+        for k in (1, 2, 0):
+            self.hands(k, [i for i in (1, 2, 3, 4) if i not in still])
+            time.sleep(0.5)  # read a few times meanwhile
+        self.assertIn("° seen", self.text("calseen"))
+        self.press("calgo")
+        self.assertIsNotNone(until(lambda: self.text("calgo") == "Nudged"))
+        self.hands(3)
+        time.sleep(0.5)
+        self.press("calgo")
+
+    def test_1_jog_moves_the_tool_point_a_step_and_refuses_what_it_cannot_reach(self):
+        b = self.browser
+        self.open_and_log_in()
+        self.assertIsNotNone(until(lambda: b.find_element(By.ID, "jogbox").is_displayed()))
+        self.assertFalse(b.find_element(By.ID, "jog-x+").is_enabled())  # not armed
+        self.arm()
+        x, y, z, pitch = panel_state()["tool"]
+        self.assertIn("at x %.1f, y %.1f" % (x, y), self.text("tool"))
+        self.jog("jog-x+", 10)
+
+        def there():
+            tool = panel_state()["tool"]
+            return all(abs(a - b) < 1.5 for a, b in zip(tool, (x + 10, y, z, pitch)))
+
+        self.assertIsNotNone(until(there, 5.0), (panel_state()["tool"], (x, y, z, pitch)))
+        # Out along x, 25 mm a step, until the arm cannot reach: refused by name.
+        for _ in range(12):
+            self.jog("jog-x+", 25)
+            if until(lambda: "cannot jog there" in self.text("jogmsg"), 0.8) is not None:
+                break
+        self.assertIn("cannot jog there: (x, y, z) = (", self.text("jogmsg"))
+        time.sleep(1.5)  # the last step it took, played out
+        moved, at = controller()["moved"], controller()["at"]
+        self.jog("jog-x+", 25)
+        self.assertIsNotNone(until(lambda: "cannot jog there" in self.text("jogmsg")))
+        time.sleep(0.5)
+        self.assertEqual((controller()["moved"], controller()["at"]), (moved, at))
+
+    def test_2_stop_ends_a_jog_on_its_way(self):
+        self.open_and_log_in()
+        self.arm()
+        self.jog("jog-y+", 25)  # 25 mm at 40 mm/s: 0.6 s
+        self.assertIsNotNone(until(lambda: panel_state().get("jog") is not None, 1.0))
+        self.press("stop")
+        self.assertIsNotNone(until(lambda: controller()["limp"] == [1, 2, 3, 4], 1.0))
+        frozen = controller()["at"]
+        time.sleep(0.8)
+        self.assertEqual(controller()["at"], frozen)  # limp: the line sends no more
+
+    def test_3_a_calibration_it_cannot_trust_is_refused_naming_the_joint(self):
+        self.open_and_log_in()
+        self.assertIsNotNone(until(lambda: self.text("calstep")))  # the state, shown
+        self.assertFalse(self.browser.find_element(By.ID, "calgo").is_enabled())  # not armed
+        self.arm()
+        moved = controller()["moved"]
+        self.calibrate(still=(3,))
+        self.assertIsNotNone(until(lambda: "cannot calibrate elbow" in self.text("calmsg")))
+
+        def bad():  # the joints the page marks as refused, once it has the board's state
+            found = self.browser.find_elements(By.CSS_SELECTOR, "#calseen .bad")
+            return [e.text.split(":")[0] for e in found]
+
+        self.assertIsNotNone(until(lambda: bad() == ["elbow"]), bad())
+        self.press("calcancel")
+        self.assertIsNotNone(until(lambda: self.text("calgo") == "Start calibration"))
+        self.assertEqual(controller()["moved"], moved)  # nothing moved
+        with open(self.file) as f:
+            self.assertEqual(json.load(f), ARM)  # nothing saved
+
+    def test_4_calibrated_by_hand_saved_and_homed_only_once_confirmed(self):
+        b = self.browser
+        self.open_and_log_in()
+        self.arm()
+        self.calibrate()
+        self.assertIsNotNone(until(lambda: self.text("calgo") == "Save"), self.text("calmsg"))
+        self.assertIn("base: trim 2.9, direction +, limits -86.3 to 85.3", self.text("calseen"))
+        self.assertIn("shoulder: trim -2.9, direction −", self.text("calseen"))
+        self.press("calgo")  # Save
+        self.assertIsNotNone(until(lambda: self.text("calgo") == "Home slowly"))
+        with open(self.file) as f:
+            saved = json.load(f)
+        self.assertEqual(saved["links"], ARM["links"])  # kept
+        self.assertEqual(saved["joints"]["base"]["trim"], 2.9)
+        # The sliders are the new joints': their limits.
+        base = self.slider("base").find_element(By.XPATH, "../..")
+        lim = base.find_element(By.CLASS_NAME, "lim")
+        self.assertIsNotNone(until(lambda: lim.text.split() == ["-86.3°", "85.3°"]), lim.text)
+        moved = controller()["moved"]
+        self.press("calgo")  # Home slowly: asked first
+        b.switch_to.alert.dismiss()
+        time.sleep(0.5)
+        self.assertEqual((controller()["moved"], controller()["limp"]), (moved, [1, 2, 3, 4]))
+        self.press("calgo")
+        b.switch_to.alert.accept()
+        rest = {str(i): HANDS[i][0] for i in HANDS}
+        self.assertIsNotNone(until(lambda: controller()["at"] == rest, 3.0), controller())
+        self.assertEqual(controller()["limp"], [])
+        self.assertIsNotNone(until(lambda: self.text("calgo") == "Start calibration"))
 
 
 def _listening(port):

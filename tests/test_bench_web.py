@@ -21,5 +21,6 @@ class Harness(unittest.TestCase):
         for joints in ("1 joint", "4 joints"):
             self.assertIn(", 0 lost", rows["latency, slider to wire, " + joints], out)
         stall = [row for name, row in rows.items() if name.startswith("longest stall")]
-        self.assertEqual(len(stall), 1, out)
-        self.assertIn("the event loop ", stall[0], out)
+        self.assertEqual(len(stall), 3, out)  # capturing and streaming; jogging; calibrating
+        for row in stall:
+            self.assertIn("the event loop ", row, out)

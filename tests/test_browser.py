@@ -22,6 +22,12 @@ TESTS = (
     "test_11_an_empty_time_adds_no_pose_in_0_ms",
     "test_12_what_capture_shows_is_what_is_added_and_a_step_is_edited_or_removed_alone",
     "test_13_the_browser_hears_no_refusal_before_the_login",
+    "test_14_each_slider_shows_its_limits_its_target_and_where_the_joint_is",
+    "test_15_a_pose_is_listed_in_the_joints_order",
+    "test_1_jog_moves_the_tool_point_a_step_and_refuses_what_it_cannot_reach",
+    "test_2_stop_ends_a_jog_on_its_way",
+    "test_3_a_calibration_it_cannot_trust_is_refused_naming_the_joint",
+    "test_4_calibrated_by_hand_saved_and_homed_only_once_confirmed",
 )
 
 _run = None

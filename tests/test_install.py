@@ -74,10 +74,13 @@ class MipWeb(unittest.TestCase):
                 sorted(os.listdir(target)),
                 [
                     "busservo.mpy",
+                    "busservo_arm.mpy",  # the panel's jog
                     "busservo_board.mpy",  # examples/web_panel.py finds board.py through it
+                    "busservo_calibrate.mpy",  # its calibration page
                     "busservo_motion.mpy",
                     "busservo_web.html.gz",
                     "busservo_web.mpy",
+                    "busservo_web_arm.mpy",  # its jog and calibration page
                 ],
             )
             use = (
@@ -380,6 +383,7 @@ class Manifest(unittest.TestCase):
                 "lib/busservo_board.py",
                 "lib/busservo_motion.py",
                 "lib/busservo_web.py",
+                "lib/busservo_web_arm.py",  # its jog and calibration page
             ],
         )
         named, meta = self.run_manifest(arm=True, calibration=True)  # both on the motion layer

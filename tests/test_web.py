@@ -226,7 +226,10 @@ class Package(Tidy):
                 "mpy/busservo.mpy",
                 "mpy/busservo_board.mpy",
                 "mpy/busservo_motion.mpy",
+                "mpy/busservo_arm.mpy",  # the panel's jog, imported only with an arm's links
+                "mpy/busservo_calibrate.mpy",  # its calibration page, imported only then
                 "mpy/busservo_web.mpy",
+                "mpy/busservo_web_arm.mpy",  # the panel's jog and calibration, imported then
             ],
         )
         self.assertEqual(package.get("deps", []), [])  # nothing from elsewhere
@@ -1187,3 +1190,324 @@ class Loop(Tidy):
         self.assertFalse(CMD_MULT_SERVO_POS_READ in during)
         self.tick(w, panel, token, 300)  # the drag is over: the page's positions are read
         self.assertIn(CMD_MULT_SERVO_POS_READ, [f[3] for f in w.frames()[before:]])
+
+
+# An arm: base, shoulder, elbow and wrist on servos 1..4, its links in a calibration file
+# of its own (a scratch folder's robot.json), as a person's calibration saves it.
+LINKS = {"base_height": 70, "upper_arm": 105, "forearm": 98, "hand": 60}
+
+
+def arm_robot(world):
+    return bm.Robot(
+        robot_bus(world),
+        {
+            "base": bm.Joint(1),
+            "shoulder": bm.Joint(2, limits=(-90, 90)),
+            "elbow": bm.Joint(3, limits=(-120, 120)),
+            "wrist": bm.Joint(4, limits=(-120, 120)),
+        },
+    )
+
+
+def on_arm(scenario, links=LINKS):
+    """Run scenario(port, world, robot, path) against a panel on arm_robot(), its calibration
+    file path (with links, if given) in a scratch folder, made and removed here."""
+    folder = scratch("web-arm")
+    os.mkdir(folder)
+    path = folder + "/robot.json"
+    world = web_world.live()
+    robot = arm_robot(world)
+    if links:
+        robot.save(path, links=links)
+    port = free_port()
+
+    async def main():
+        server = asyncio.create_task(busservo_web.serve(robot, PASSWORD, port, path=path))
+        await asyncio.sleep_ms(50)
+        try:
+            await scenario(port, world, robot, path)
+        finally:
+            server.cancel()
+            await asyncio.sleep_ms(20)
+
+    asyncio.new_event_loop()
+    try:
+        asyncio.run(main())
+    finally:
+        sh("rm -rf " + folder)
+
+
+async def state(port, token):
+    return (await http(port, "GET", "/api/state", token=token))[1]
+
+
+async def polled(port, token, ms):
+    """The page, open for ms: it asks for the state 5 times a second."""
+    for _ in range(ms // 200):
+        await http(port, "GET", "/api/state", token=token)
+        await asyncio.sleep_ms(200)
+
+
+class Sliders(Tidy):
+    # Each slider shows the target the page sent beside where the joint is.
+    def test_the_state_gives_each_joints_target_beside_its_live_position(self):
+        async def scenario(port, world, robot):
+            token = await armed(port)
+            self.assertEqual((await state(port, token))["to"], None)  # no target yet
+            await http(port, "POST", "/api/target", {"targets": {"elbow": 45}}, token)
+            self.assertEqual((await state(port, token))["to"], [None, None, 45, None])
+            self.assertTrue(await until(lambda: at(world, robot, "elbow", 45)))
+            await polled(port, token, 400)  # the live positions are read while a page is open
+            reply = await state(port, token)
+            self.assertEqual(reply["at"][2], 45.1)  # the servo's nearest position: 688
+            status, reply = await http(port, "GET", "/api/joints", token=token)
+            self.assertEqual([(j["lo"], j["hi"]) for j in reply][1:], [(-90, 90)] * 2 + [(0, 60)])
+            reply = (await http(port, "POST", "/api/estop", {}, token))[1]
+            self.assertEqual(reply["to"], None)  # limp: no target
+
+        run(scenario)
+
+
+class Jog(Tidy):
+    def test_a_jog_moves_the_tool_point_a_step_along_one_axis(self):
+        async def scenario(port, world, robot, path):
+            token = await armed(port)
+            pose = {"base": 0, "shoulder": 30, "elbow": 60, "wrist": 60}
+            await http(port, "POST", "/api/target", {"targets": pose}, token)
+            self.assertTrue(await until(lambda: at(world, robot, "wrist", 60)))
+            await polled(port, token, 400)
+            x, y, z, pitch = (await state(port, token))["tool"]
+            status, reply = await http(port, "POST", "/api/jog", {"axis": "x", "by": 10}, token)
+            self.assertEqual(status, 200, reply)
+            self.assertEqual(reply["jog"], [x + 10, y, z, pitch])
+            await polled(port, token, 1200)  # 10 mm at 40 mm/s, and the reads
+            tool = (await state(port, token))["tool"]
+            for got, want in zip(tool, (x + 10, y, z, pitch)):
+                self.assertTrue(abs(got - want) < 1.5, (tool, (x + 10, y, z, pitch)))
+            # A second jog goes on from the first's target, not from a read.
+            status, reply = await http(port, "POST", "/api/jog", {"axis": "z", "by": -5}, token)
+            self.assertEqual(reply["jog"], [x + 10, y, z - 5, pitch])
+
+        on_arm(scenario)
+
+    def test_a_jog_the_arm_cannot_reach_is_refused_by_name_and_moves_nothing(self):
+        async def scenario(port, world, robot, path):
+            token = await armed(port)
+            pose = {"base": 0, "shoulder": 30, "elbow": 60, "wrist": 60}
+            await http(port, "POST", "/api/target", {"targets": pose}, token)
+            self.assertTrue(await until(lambda: at(world, robot, "wrist", 60)))
+            await asyncio.sleep_ms(100)
+            before = len(moves(world))
+            status, reply = await http(port, "POST", "/api/jog", {"axis": "x", "by": 100}, token)
+            self.assertEqual(status, 409, reply)
+            self.assertIn("cannot jog there", reply["error"])
+            self.assertIn("out of reach", reply["error"])
+            await asyncio.sleep_ms(200)
+            self.assertEqual(len(moves(world)), before)
+            for body in ({"axis": "w", "by": 1}, {"axis": "x", "by": 1000}, {"axis": "x"}):
+                status, reply = await http(port, "POST", "/api/jog", body, token)
+                self.assertEqual(status, 400, (body, reply))
+
+        on_arm(scenario)
+
+    def test_jog_needs_the_armed_page_and_an_arm(self):
+        async def scenario(port, world, robot, path):
+            token = await login(port)
+            status, reply = await http(port, "POST", "/api/jog", {"axis": "x", "by": 5}, token)
+            self.assertEqual(status, 409)
+            self.assertIn("arm the panel first", reply["error"])
+            self.assertFalse("tool" in await state(port, token))  # no links: no arm
+            await http(port, "POST", "/api/arm", {"on": True}, token)
+            status, reply = await http(port, "POST", "/api/jog", {"axis": "x", "by": 5}, token)
+            self.assertEqual(status, 409)
+            self.assertIn("no arm to jog: no links in %s" % path, reply["error"])
+            self.assertEqual(moves(world), [])
+
+        on_arm(scenario, links=None)
+
+    def test_the_dead_man_and_stop_end_a_jog_on_its_way(self):
+        async def scenario(port, world, robot, path):
+            token = await armed(port)
+            pose = {"base": 0, "shoulder": 20, "elbow": 70, "wrist": 60}
+            await http(port, "POST", "/api/target", {"targets": pose}, token)
+            self.assertTrue(await until(lambda: at(world, robot, "wrist", 60)))
+            await http(port, "POST", "/api/jog", {"axis": "y", "by": 80}, token)  # 2 s
+            await asyncio.sleep_ms(100)
+            # The page goes silent: within about a second, disarmed, and the line stops.
+            self.assertTrue(await until(lambda: busservo_web_armed(robot) is False, 1500))
+            sent = robot.updates
+            await asyncio.sleep_ms(300)
+            self.assertEqual(robot.updates, sent)
+            self.assertEqual(_panels[-1]._line, None)
+            # Armed again, a jog; STOP mid-way: every joint limp, no frame after.
+            token = await armed(port)
+            await http(port, "POST", "/api/jog", {"axis": "y", "by": -60}, token)
+            await asyncio.sleep_ms(200)
+            await http(port, "POST", "/api/estop", {}, token)
+            self.assertEqual(world.sim.limp, set())  # (the controller has it a frame later)
+            self.assertTrue(await until(lambda: world.sim.limp == {1, 2, 3, 4}))
+            sent = robot.updates
+            await asyncio.sleep_ms(300)
+            self.assertEqual(robot.updates, sent)
+
+        on_arm(scenario)
+
+
+# A calibration by hand, through the panel: each servo's position at the rest pose, at the
+# two ends of its safe range, and nudged (as examples/calibrate.py's simulated hands).
+HANDS = {1: (512, 140, 880, 560), 2: (488, 200, 800, 440), 3: (500, 150, 860, 545)}
+HANDS[4] = (530, 180, 880, 480)
+
+
+def hands(world, k, only=(1, 2, 3, 4)):
+    """The person's hands put each servo in only at HANDS[id][k]."""
+    for i in only:
+        world.sim.turn(i, HANDS[i][k])
+
+
+async def calibrate(port, world, token, until_step="check", still=()):
+    """The calibration page's steps, done by the person's hands, to until_step; the servos
+    in still are not moved in the sweep. The last answer: (status, reply)."""
+    ask = lambda body: http(port, "POST", "/api/calibrate", body, token)  # noqa: E731
+    reply = await ask({"step": "start"})
+    assert reply[0] == 200, reply
+    assert await until(lambda: world.sim.limp == {1, 2, 3, 4})  # the unload has come
+    hands(world, 0)
+    await polled(port, token, 200)
+    reply = await ask({"step": "rest"})
+    assert reply[0] == 200, reply
+    moving = [i for i in (1, 2, 3, 4) if i not in still]
+    for k in (1, 2, 0):  # the sweep: each joint to both ends, and back
+        hands(world, k, moving)
+        await polled(port, token, 400)
+    reply = await ask({"step": "nudge"})
+    assert reply[0] == 200, reply
+    hands(world, 3)
+    await polled(port, token, 400)
+    return await ask({"step": until_step})
+
+
+class Calibrating(Tidy):
+    def test_the_loop_knows_a_positions_reply_by_the_drivers_own_command(self):
+        # (busservo_web names it without importing busservo: its value, checked here)
+        self.assertEqual(busservo_web._POSITIONS, CMD_MULT_SERVO_POS_READ)
+
+    def test_the_calibration_page_calibrates_saves_and_homes_only_once_confirmed(self):
+        async def scenario(port, world, robot, path):
+            token = await login(port)
+            status, reply = await http(port, "POST", "/api/calibrate", {"step": "start"}, token)
+            self.assertEqual(status, 409)  # unarmed: nothing goes limp
+            self.assertEqual(world.sim.limp, set())
+            await http(port, "POST", "/api/arm", {"on": True}, token)
+            status, reply = await calibrate(port, world, token)
+            self.assertEqual(status, 200, reply)
+            self.assertEqual(world.sim.limp, {1, 2, 3, 4})  # limp since start
+            self.assertEqual(reply["cal"]["step"], "check")
+            # base: trim (512 - 500) * 6 / 25 degrees, +1, limits 3 inside what was seen (140
+            # and 880: -86.4 and 91.2 degrees from the centre, -89.3 and 88.3 from the trim)
+            self.assertEqual(reply["cal"]["joints"][0], [2.9, 1, -86.3, 85.3])
+            self.assertEqual(reply["cal"]["joints"][1][1], -1)  # the shoulder, the other way
+            # Nothing drives it while it calibrates.
+            status, reply = await http(
+                port, "POST", "/api/target", {"targets": {"base": 5}}, token
+            )
+            self.assertEqual(status, 409)
+            self.assertIn("calibration is under way", reply["error"])
+            status, reply = await http(port, "POST", "/api/calibrate", {"step": "save"}, token)
+            self.assertEqual((status, reply["cal"]["step"]), (200, "saved"), reply)
+            with open(path) as f:
+                saved = json.load(f)
+            self.assertEqual(saved["links"], LINKS)  # kept
+            self.assertEqual(saved["joints"]["base"]["trim"], 2.9)
+            self.assertEqual(reply["robots"], 2)  # the page reads the joints again
+            status, joints = await http(port, "GET", "/api/joints", token=token)
+            self.assertEqual((joints[0]["lo"], joints[0]["hi"]), (-86.3, 85.3))
+            self.assertEqual(world.sim.limp, {1, 2, 3, 4})  # saved: still limp
+            before = len(moves(world))
+            status, reply = await http(port, "POST", "/api/calibrate", {"step": "home"}, token)
+            self.assertEqual(status, 400)  # not confirmed: nothing moves
+            self.assertIn('"confirm": true', reply["error"])
+            await polled(port, token, 200)
+            self.assertEqual(len(moves(world)), before)
+            status, reply = await http(
+                port, "POST", "/api/calibrate", {"step": "home", "confirm": True}, token
+            )
+            self.assertEqual((status, reply.get("cal"), reply["limp"]), (200, None, False), reply)
+            self.assertTrue(await until(lambda: len(moves(world)) > before))  # on the wire
+            home = moves(world)[-1]
+            self.assertEqual(home[3], CMD_SERVO_MOVE)
+            # Each joint to its 0, the rest pose, at 30 degrees/s for the furthest: the
+            # wrist, nudged 50 positions (12 degrees) from it, in 400 ms.
+            positions = {home[i]: home[i + 1] | home[i + 2] << 8 for i in range(7, len(home), 3)}
+            self.assertEqual(positions, {i: HANDS[i][0] for i in (1, 2, 3, 4)})
+            self.assertEqual(home[5] | home[6] << 8, 400)
+            self.assertTrue(await until(lambda: world.sim.position(1) == 512, 2000))
+
+        on_arm(scenario)
+
+    def test_a_calibration_it_cannot_trust_is_refused_naming_the_joint_and_saves_nothing(self):
+        async def scenario(port, world, robot, path):
+            token = await armed(port)
+            with open(path) as f:
+                before = f.read()
+            status, reply = await calibrate(port, world, token, still=(3,))
+            self.assertEqual(status, 409, reply)
+            self.assertIn("cannot calibrate elbow: did not move", reply["error"])
+            status, reply = await http(port, "GET", "/api/state", token=token)
+            self.assertEqual(list(reply["cal"]["why"]), ["elbow"])
+            self.assertEqual(reply["cal"]["step"], "nudge")  # nudge again, or start over
+            status, reply = await http(port, "POST", "/api/calibrate", {"step": "save"}, token)
+            self.assertEqual(status, 409, reply)
+            with open(path) as f:
+                self.assertEqual(f.read(), before)
+            self.assertEqual(moves(world)[-1][3], CMD_MULT_SERVO_UNLOAD)  # nothing moved
+            self.assertEqual(world.sim.limp, {1, 2, 3, 4})
+
+        on_arm(scenario)
+
+    def test_stop_or_silence_ends_a_calibration_and_its_joints_stay_limp(self):
+        async def scenario(port, world, robot, path):
+            token = await armed(port)
+            await http(port, "POST", "/api/calibrate", {"step": "start"}, token)
+            self.assertTrue(await until(lambda: busservo_web_armed(robot) is False, 1500))
+            self.assertEqual(_panels[-1].cal, None)
+            token = await armed(port)
+            await http(port, "POST", "/api/calibrate", {"step": "start"}, token)
+            status, reply = await http(port, "POST", "/api/estop", {}, token)
+            self.assertEqual((reply.get("cal"), reply["armed"]), (None, False))
+            self.assertEqual(world.sim.limp, {1, 2, 3, 4})
+            self.assertEqual([f[3] for f in moves(world)].count(CMD_SERVO_MOVE), 0)
+
+        on_arm(scenario)
+
+    def test_a_calibration_never_waits_on_the_wire(self):
+        async def scenario(port, world, robot, path):
+            def query(*args):
+                raise AssertionError("a blocking query")
+
+            robot.bus.read_positions = robot.bus.read_battery = query
+            token = await armed(port)
+            status, reply = await calibrate(port, world, token, "check")
+            self.assertEqual(status, 200, reply)
+            await http(port, "POST", "/api/calibrate", {"step": "save"}, token)
+            body = {"step": "home", "confirm": True}
+            status, reply = await http(port, "POST", "/api/calibrate", body, token)
+            self.assertEqual(status, 200, reply)
+
+        on_arm(scenario)
+
+
+class Lazy(Tidy):
+    def test_a_panel_without_an_arm_imports_neither_the_arm_nor_the_calibration(self):
+        # Its RAM is the robot program's: a panel with no links to jog, and no calibration
+        # begun, leaves busservo_arm, busservo_calibrate and its own busservo_web_arm on the
+        # filesystem.
+        script = (
+            "import sys; sys.path.append('tests'); import web_world, busservo_web;"
+            "p = busservo_web.Panel(web_world.robot(web_world.live()), 'secret-pw', path='%s');"
+            "p.state(); print([m for m in sys.modules if m in ('busservo_arm',"
+            " 'busservo_calibrate', 'busservo_web_arm')])"
+        )
+        ok, out = sh('sh boards/unix.sh -c "%s"' % (script % scratch("none")))
+        self.assertTrue(ok, out)
+        self.assertEqual(out.strip().split("\n")[-1], "[]", out)

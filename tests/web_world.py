@@ -7,7 +7,9 @@
 #
 # --probe N also serves, on port N, what only the controller knows: each servo's
 # position and which are limp, as JSON (GET anything). It prints "serving" once
-# both listen.
+# both listen. GET /turn/ID/POSITION (more pairs may follow) on it turns those servos by
+# hand first, if they are limp. --calibration PATH: the robot of that file, and the
+# panel's calibration file (an arm's links, and where its calibration page saves).
 import asyncio
 import json
 import sys
@@ -121,8 +123,12 @@ async def login(port, password="secret-pw"):
 async def probe(world, port):
     async def answer(reader, writer):
         try:
+            line = await reader.readline()
             while (await reader.readline()).strip():
                 pass  # the request's lines, read: closing with them unread would reset
+            turn = line.split()[1].split(b"/") if line.startswith(b"GET /turn/") else ()
+            for i in range(2, len(turn) - 1, 2):  # GET /turn/ID/POSITION/...: hands
+                world.sim.turn(int(turn[i]), int(turn[i + 1]))
             body = json.dumps(controller(world)).encode()
             await writer.awrite(
                 b"HTTP/1.0 200 OK\r\nContent-Type: application/json\r\n\r\n" + body
@@ -133,12 +139,16 @@ async def probe(world, port):
     return await asyncio.start_server(answer, "127.0.0.1", port)
 
 
-async def main(port, password, probe_port):
+async def main(port, password, probe_port, path):
     world = live()
     arm = robot(world)
+    if path:  # a calibration file: its joints (and links: an arm to jog)
+        arm = bm.Robot.load(arm.bus, path)
     if probe_port:
         await probe(world, probe_port)
-    server = asyncio.create_task(busservo_web.serve(arm, password, port))
+    server = asyncio.create_task(
+        busservo_web.serve(arm, password, port, path=path or "robot.json")
+    )
     await asyncio.sleep_ms(100)
     print("serving", port, flush=True) if hasattr(print, "flush") else print("serving", port)
     await server
@@ -155,5 +165,6 @@ if __name__ == "__main__":
             int(option("--port", 8080)),
             option("--password", "secret-pw"),
             int(option("--probe", 0)),
+            option("--calibration", None),
         )
     )
