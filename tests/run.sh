@@ -422,7 +422,7 @@ show() {
         printf '%s\n' "$out" | sed "s|^|$label |"
     else
         echo "$label $((ran - skip)) passed"
-        printf '%s\n' "$out" | grep -i 'skipped' | sed "s|^|$label |"
+        printf '%s\n' "$out" | grep -i 'skipped' | grep -v '^OK (' | sed "s|^|$label |"
     fi
     if [ -z "$ran" ]; then
         echo "$label did not run to its end"
