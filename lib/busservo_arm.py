@@ -387,7 +387,9 @@ class Arm:
         return self._at
 
     def _distance(self, pose):
-        # How far the tool point and the wrist go, from where the arm is to pose: the more.
+        # How far the tool point and the wrist go, from where the arm is to pose: the more,
+        # and a degree of the pitch counts as a mm, so that with a short hand (or none) the
+        # pitch alone does not turn at once.
         at = self._known()
         x0, y0, z0, p0 = self._point(at[0], at[1], at[2], at[3])
         x1, y1, z1, p1 = self._point(pose["base"], pose["shoulder"], pose["elbow"], pose["wrist"])
@@ -401,7 +403,7 @@ class Arm:
         dx = (x1 - h * q1 * math.cos(b1)) - (x0 - h * q0 * math.cos(b0))
         dy = (y1 - h * q1 * math.sin(b1)) - (y0 - h * q0 * math.sin(b0))
         dz = (z1 - h * math.sin(p1 * _RAD)) - (z0 - h * math.sin(p0 * _RAD))
-        return max(tool, math.sqrt(dx * dx + dy * dy + dz * dz))
+        return max(tool, math.sqrt(dx * dx + dy * dy + dz * dz), abs(_wrap(p1 - p0)))
 
     def where(self, positions=None):
         """(x, y, z, pitch) of the tool point, from the joints' positions read now (a

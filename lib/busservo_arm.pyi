@@ -84,9 +84,9 @@ class Arm:
         """Move the tool point to x, y, z mm, the hand at pitch (None: the reachable pitch
         nearest -90), in one CMD_SERVO_MOVE for the four joints: within ms (0..65535), or at
         mm_s (one of the two), timed so that neither the tool point nor the wrist goes faster
-        in a straight line from where the arm last went (move_to(), a line, or where(); read
-        first if none: a blocking query). A joint's own dps lengthens the move. Stops a line
-        playing. Returns the move's ms."""
+        in a straight line (nor the pitch faster than mm_s degrees/s) from where the arm last
+        went (move_to(), a line, or where(); read first if none: a blocking query). A joint's
+        own dps lengthens the move. Stops a line playing. Returns the move's ms."""
     def where(
         self, positions: Mapping[int, int | None] | None = None
     ) -> tuple[float, float, float, float]:

@@ -296,6 +296,19 @@ class Moves(Tidy):
         settle(w, bus, 150)
         self.assertEqual(commands(w), [CMD_MULT_SERVO_POS_READ] + [MOVE] * 5)
 
+    def test_the_pitch_alone_turns_no_faster_than_mm_s_degrees_a_second(self):
+        # A hand of length 0 (the tool point on the wrist's axis): the pitch alone moves no
+        # point at all, yet the wrist turns. A degree of pitch counts as a mm of the way, so
+        # it turns at mm_s degrees/s, not at once.
+        w, bus = world()
+        links = dict(LINKS, hand=0)
+        a = ba.Arm(robot(bus), links)
+        hand(w, {1: 500, 2: 515, 3: 500, 4: 500})
+        a.move_to(150, 0, 100, pitch=0, ms=0)
+        self.assertEqual(a.move_to(150, 0, 100, pitch=-30, mm_s=40), 750)
+        line = a.line_to(150, 0, 100, pitch=-60, mm_s=40)
+        self.assertEqual(round(line.ms), 750)
+
     def test_where_reads_the_tool_point(self):
         w, bus = world()
         a = arm(bus)
