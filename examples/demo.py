@@ -76,8 +76,8 @@ def main():
     nudged = {i: p + 100 if p < 500 else p - 100 for i, p in here.items()}
     back = {i: max(p, 0) for i, p in here.items()}  # a servo at 0 may read -3
     say(
-        "this moves each by 100, toward 500 (down from 500 on), over 2 s, back over 2 s, "
-        "then runs group %d" % GROUP
+        "this moves each by 100 toward the middle, 500 (down from there), over 2 s, back over "
+        "2 s, then runs group %d" % GROUP
     )
     if not I_HAVE_CHECKED_MY_ROBOT:
         say("nothing moved: check, then set I_HAVE_CHECKED_MY_ROBOT = True (top of this file)")

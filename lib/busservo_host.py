@@ -330,7 +330,7 @@ def _panel(port, args):
         task = asyncio.ensure_future(busservo_web.serve(robot, key, tcp))
         await asyncio.sleep(0.2)
         if not task.done():
-            print("open http://127.0.0.1:%d/ and log in with the password %s" % (tcp, key))
+            print("open http://127.0.0.1:%d/ and log in with the password %r" % (tcp, key))
             print("(Ctrl-C stops the panel)", flush=True)
         await task
 

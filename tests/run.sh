@@ -442,11 +442,14 @@ EOF
 }
 
 # The checkout as it stands: each file and folder but .git/ and .venv/ (what the set-up
-# installs), with its size and time. No test writes outside a scratch folder of its own: one
-# that did (a maker's sequences/, teach.json or web_panel.txt overwritten, a folder made and
-# removed again) changes it, and the run fails, naming what changed.
+# installs), and build/ and lib/*.egg-info/ (what the README's `pip install .` writes, which a
+# maker may run beside the tests), with its size and time. No test writes outside a scratch
+# folder of its own: one that did (a maker's sequences/, teach.json or web_panel.txt
+# overwritten, a folder made and removed again) changes it, and the run fails, naming what
+# changed.
 checkout() {
-    find . \( -path ./.git -o -path ./.venv \) -prune -o -printf '%p %y %s %T@\n' | LC_ALL=C sort
+    find . \( -path ./.git -o -path ./.venv -o -path ./build -o -path './lib/*.egg-info' \) \
+        -prune -o -printf '%p %y %s %T@\n' | LC_ALL=C sort
 }
 checkout >"$tmp/checkout.before"
 
