@@ -618,11 +618,77 @@ MUTANTS = {
             "        if ms > _GAP_MS:",
             "a stream faster than the wire gets moves shorter than a frame: jerky",
         ),
+        # A slowed joint steps by the time since the last frame, its owed fraction carried,
+        # each frame glides for its longest step at the joint's dps, and no frame goes
+        # before the servo is there.
         (
             "step-dps-tenfold",
-            "                most = pps * ms // 1000 or 1",
-            "                most = pps * ms // 100 or 1",
-            "the stream moves a joint ten times faster than its dps",
+            "                owed[i] += pps * elapsed",
+            "                owed[i] += 10 * pps * elapsed",
+            "a slowed joint's steps are ten times its dps: each frame commits it to a long "
+            "glide, and a target streamed meanwhile waits for it",
+        ),
+        (
+            "step-gate-off",
+            "        if self._slowing and time.ticks_diff(now, self._sent) < self._ms:",
+            "        if False:",
+            "frames go before a slowed joint is there: the servo is redirected mid-glide, the "
+            "wire is full of frames",
+        ),
+        (
+            "step-gate-on-pace",
+            "        self._ms = glide",
+            "        self._ms = ms",
+            "the next frame waits for the stream's pace, not the glide: it goes before the "
+            "servo is there",
+        ),
+        (
+            "step-sent-not-noted",
+            "        self._sent = now\n",
+            "",
+            "a slowed joint's step is timed from the stream's start: the gate never holds, "
+            "each step as long as the last",
+        ),
+        (
+            "step-owed-dropped",
+            "                owed[i] -= most * 1000",
+            "                owed[i] = 0",
+            "the part of a position a frame cannot take is lost: a slow joint (a few "
+            "degrees/s) never moves, a faster one runs slow",
+        ),
+        (
+            "step-owed-kept-at-goal",
+            "                    most = owed[i] = 0  # there: nothing owed",
+            "                    most = 0  # there: nothing owed",
+            "a joint that waited at its target goes its next way in one long glide, "
+            "deaf to the targets after",
+        ),
+        (
+            "step-elapsed-uncapped",
+            "        if elapsed > cap:\n            elapsed = cap\n",
+            "",
+            "after a pause, the first frame commits a slowed joint to the whole pause's way "
+            "at once: the targets after it wait",
+        ),
+        (
+            "step-cap-without-period",
+            "        cap = self._ms + since",
+            "        cap = self._ms",
+            "a slowed joint loses the loop's period each frame: slower than its dps",
+        ),
+        (
+            "step-glide-ignored",
+            "                if most > glide:\n                    glide = most\n",
+            "",
+            "a frame glides for the stream's pace whatever its step: a joint turns faster "
+            "than its dps",
+        ),
+        (
+            "step-glide-tenfold-short",
+            "                most = (abs(position - at[i]) * 1000 + pps - 1) // pps",
+            "                most = (abs(position - at[i]) * 100 + pps - 1) // pps",
+            "a long step glides a tenth of its time at the dps: the joint jerks at ten times "
+            "its dps, then waits",
         ),
         (
             "step-dps-one-way",
