@@ -58,12 +58,22 @@ MODULES = {
         "test_queries",
         "test_reliability",
     ],
-    "busservo_motion": ["test_motion"],
+    "busservo_motion": ["test_motion", "test_arm"],  # the arm's lines stream through it
     "busservo_web": ["test_web"],
+    "busservo_arm": ["test_arm"],
+    "busservo_calibrate": ["test_calibrate"],
+    "examples/calibrate": ["test_calibrate", "test_examples"],
 }
-TIMEOUT_S = {"test_reliability": 1800, "test_motion": 300, "test_web": 600}
+TIMEOUT_S = {
+    "test_reliability": 1800,
+    "test_motion": 300,
+    "test_web": 600,
+    "test_calibrate": 300,
+    "test_examples": 600,
+}
 TIMEOUT_DEFAULT_S = 120
-REAL_TIME = ("test_sim", "test_web")  # tests on the machine's clock: the load may fail them
+# Tests on the machine's clock (a server, keys typed, an example run): the load may fail them.
+REAL_TIME = ("test_sim", "test_web", "test_calibrate", "test_examples")
 
 # (name, the exact text, its replacement, what a user would see). Names are for NOTES.
 MUTANTS = {
@@ -1074,6 +1084,315 @@ MUTANTS = {
             "armed",
         ),
     ],
+    "busservo_arm": [
+        (
+            "base-mirrored",
+            "            base = math.atan2(y, x) * _DEG",
+            "            base = math.atan2(-y, x) * _DEG",
+            "move_to(150, 60, ...) turns the base to the right: the tool point lands at y = -60",
+        ),
+        (
+            "base-limits-unchecked",
+            "        if not joint.lo <= base <= joint.hi:",
+            "        if False:",
+            "a point behind the base is taken: the robot clamps the base, the arm goes elsewhere",
+        ),
+        (
+            "base-on-axis-to-0",
+            "            base = self._at[0] if self._at else 0.0",
+            "            base = 0.0",
+            "a point straight above the base swings the base round to 0 for nothing",
+        ),
+        (
+            "hand-offset-sign",
+            "        wr = r - self._h * math.cos(p)",
+            "        wr = r + self._h * math.cos(p)",
+            "the wrist is put the hand's length beyond the tool point: every point with the "
+            "hand not vertical is missed",
+        ),
+        (
+            "elbow-cosine-law",
+            "        c = (d2 - u * u - f * f) / (2 * u * f)",
+            "        c = (d2 - u * u + f * f) / (2 * u * f)",
+            "the elbow's angle is wrong: the tool point misses every target",
+        ),
+        (
+            "elbow-down-ignored",
+            "        if not self.elbow_up:\n            e = -e\n",
+            "",
+            "elbow_up=False gives the elbow-up solution: the arm does not go where it was told "
+            "to, perhaps into the table",
+        ),
+        (
+            "wrist-pitch-sign",
+            "        self._w = w = _wrap(90 - pitch - s - e)",
+            "        self._w = w = _wrap(90 + pitch - s - e)",
+            "the hand points up when asked to point down",
+        ),
+        (
+            "plane-limits-unchecked",
+            "                if not joint.lo <= value <= joint.hi:",
+            "                if False:",
+            "a pose past the shoulder's, elbow's or wrist's limit is taken: the robot clamps "
+            "it, the tool point goes elsewhere (into the table)",
+        ),
+        (
+            "too-near-taken",
+            "        if c > 1 or c < -1:",
+            "        if c > 1:",
+            "a point nearer the shoulder than the folded elbow reaches raises a bare math "
+            "domain error, not the reach",
+        ),
+        (
+            "pitch-not-halved",
+            "                    for _ in range(_HALVE):",
+            "                    for _ in range(0):",
+            "with no pitch given, the hand is up to 2 degrees further from straight down than "
+            "the limits need",
+        ),
+        (
+            "point-y-mirrored",
+            "        return r * math.cos(base), r * math.sin(base), z, _wrap(90 - c * _DEG)",
+            "        return r * math.cos(base), -r * math.sin(base), z, _wrap(90 - c * _DEG)",
+            "where() and point() give y mirrored: a line starts from the wrong place",
+        ),
+        (
+            "mm-s-tenfold",
+            "            ms = math.ceil(self._distance(pose) * 1000 / mm_s - 1e-6)",
+            "            ms = math.ceil(self._distance(pose) * 100 / mm_s - 1e-6)",
+            "move_to(..., mm_s=50) goes at 500 mm/s",
+        ),
+        (
+            "distance-tool-only",
+            "        return max(tool, math.sqrt(dx * dx + dy * dy + dz * dz))",
+            "        return tool",
+            "a turn of the hand about the tool point at mm_s takes no time: the wrist whips "
+            "round at full speed",
+        ),
+        (
+            "move-to-keeps-line",
+            "        if robot.player:\n            robot.player.stop()\n"
+            "        took = robot.move(pose, ms=ms)",
+            "        took = robot.move(pose, ms=ms)",
+            "a line going on after move_to() pulls the arm back onto it",
+        ),
+        (
+            "load-elbow-up",
+            "            return Arm(robot, links, elbow_up)",
+            "            return Arm(robot, links)",
+            "Arm.load(..., elbow_up=False) solves elbow up: the arm goes the other way",
+        ),
+        (
+            "save-drops-the-rest",
+            "        if _type(config) is not dict:\n            config = {}",
+            "        config = {}",
+            "arm.save() loses what else robot.json holds",
+        ),
+        (
+            "line-checks-the-end-only",
+            "        for k in range(1, n + 1):",
+            "        for k in range(n, n + 1):",
+            "a line whose ends are in reach but whose middle is not starts, and the arm cuts "
+            "across (the robot clamps)",
+        ),
+        (
+            "line-dps-ignored",
+            "                if dps:  # with a margin",
+            "                if False:  # with a margin",
+            "a line too fast for a joint's dps is not slowed: the robot slows that joint alone, "
+            "and the tool point leaves the line",
+        ),
+        (
+            "line-no-dps-margin",
+            "_DPS = 0.9  # a line plans",
+            "_DPS = 1.0  # a line plans",
+            "a line planned at the dps itself: the stream's rounding slows a joint, the tool "
+            "point leaves the line",
+        ),
+        (
+            "line-late-uncapped",
+            "            t += dt if dt < _LATE_MS else _LATE_MS",
+            "            t += dt",
+            "after a late loop (a GC, a blocking read), the line jumps ahead: a joint with a "
+            "dps lags, the tool point leaves the line",
+        ),
+        (
+            "line-base-mirrored",
+            '            pose["base"] = math.atan2(y, x) * _DEG',
+            '            pose["base"] = math.atan2(-y, x) * _DEG',
+            "a line runs mirrored across the x axis",
+        ),
+        (
+            "line-solves-on-a-busy-wire",
+            "        if robot.bus.wire_ms() > (since if since < frame else frame):\n"
+            "            return False\n        # The line's time",
+            "        # The line's time",
+            "line.step() solves (allocating) at every call while the wire is busy: the loop "
+            "slows, the GC runs",
+        ),
+        (
+            "line-stop-keeps-targets",
+            "            self._end()\n            self.robot.hold()",
+            "            self._end()",
+            "after line.stop(), a point streamed but not yet sent goes with the next "
+            "robot.step(): the arm moves on",
+        ),
+    ],
+    "busservo_calibrate": [
+        (
+            "limp-skipped",
+            "        self._robot.limp()",
+            "        pass",
+            "the joints stay stiff: the person fights the servos, nothing is seen",
+        ),
+        (
+            "kind-ignored",
+            "            joints[name] = bm.Joint(servo_id, kind=kinds.get(name, bm.BUS))",
+            "            joints[name] = bm.Joint(servo_id)",
+            "a PWM joint is read as a bus servo: its trim and limits are nonsense",
+        ),
+        (
+            "missing-servo-unnamed",
+            "            if position is None:\n                raise OSError(",
+            "            if False:\n                raise OSError(",
+            "a servo that does not answer gives a bare TypeError, not its joint's name",
+        ),
+        (
+            "range-keeps-the-first",
+            "            if lo[i] is None or d < lo[i]:",
+            "            if lo[i] is None:",
+            "the sweep's low end is the first sample: a joint's limit is where the sweep began",
+        ),
+        (
+            "nudge-from-the-centre",
+            "        self._moved = [round(now[i] - self._rest[i], 1) for i in range(len(now))]",
+            "        self._moved = [round(now[i], 1) for i in range(len(now))]",
+            "the direction is read from the servo's centre, not the rest pose: a joint at "
+            "rest far from its centre gets the wrong direction",
+        ),
+        (
+            "range-under-10-taken",
+            "        if span < RANGE_MIN:",
+            "        if False:",
+            "a joint moved a few degrees is calibrated: limits a few degrees wide, or refused "
+            "with a bare error",
+        ),
+        (
+            "rest-outside-range-taken",
+            "        if not lo - MARGIN <= rest <= hi + MARGIN:",
+            "        if False:",
+            "a rest pose outside the range swept is taken: its 0 is outside its limits, home() "
+            "goes elsewhere",
+        ),
+        (
+            "rest-past-the-end-taken",
+            "        if abs(rest) > _HALF[joint.kind]:",
+            "        if False:",
+            "a horn mounted past its servo's end is not named: a bare trim error",
+        ),
+        (
+            "small-nudge-taken",
+            "        if abs(moved) < NUDGE_MIN:",
+            "        if False:",
+            "a tremor of a degree decides a joint's direction: it may turn the wrong way",
+        ),
+        (
+            "backward-nudge-refused",
+            "        if abs(moved) < NUDGE_MIN:",
+            "        if moved < NUDGE_MIN:",
+            "a joint whose servo is mounted the other way round can never be calibrated",
+        ),
+        (
+            "trim-sign",
+            "            trim = self._rest[i]",
+            "            trim = -self._rest[i]",
+            "each joint's 0 is mirrored about its servo's centre: home() goes elsewhere",
+        ),
+        (
+            "direction-inverted",
+            "            direction = 1 if self._moved[i] > 0 else -1",
+            "            direction = -1 if self._moved[i] > 0 else 1",
+            "every joint turns the wrong way",
+        ),
+        (
+            "limits-direction-ignored",
+            "            a = direction * (self._lo[i] - trim)\n"
+            "            b = direction * (self._hi[i] - trim)",
+            "            a = self._lo[i] - trim\n            b = self._hi[i] - trim",
+            "a reversed joint's limits are mirrored: it can be driven past its safe range",
+        ),
+        (
+            "limits-trim-ignored",
+            "            a = direction * (self._lo[i] - trim)\n"
+            "            b = direction * (self._hi[i] - trim)",
+            "            a = direction * self._lo[i]\n            b = direction * self._hi[i]",
+            "the limits are off by the trim: a joint goes that far past its safe range",
+        ),
+        (
+            "low-margin-outside",
+            "            low = max(round(min(a, b) + MARGIN, 1), -half - direction * trim)",
+            "            low = max(round(min(a, b) - MARGIN, 1), -half - direction * trim)",
+            "the low limit is 3 degrees outside the range seen: into the end stop",
+        ),
+        (
+            "high-margin-outside",
+            "            high = min(round(max(a, b) - MARGIN, 1), half - direction * trim)",
+            "            high = min(round(max(a, b) + MARGIN, 1), half - direction * trim)",
+            "the high limit is 3 degrees outside the range seen: into the end stop",
+        ),
+        (
+            "save-uncalibrated",
+            "        robot = self.robot()\n        config =",
+            "        robot = self._robot\n        config =",
+            "save() writes the servos as they came (no trims, full reach) and refuses nothing",
+        ),
+        (
+            "links-unchecked",
+            '            config["links"] = _links(links)',
+            '            config["links"] = links',
+            "links that are no lengths are saved: busservo_arm refuses the file later",
+        ),
+        (
+            "links-negative-taken",
+            "not 0 <= mm <= 10000:",
+            "not mm <= 10000:",
+            "a negative link length is saved",
+        ),
+    ],
+    # The example a maker runs: nothing moves under power before the person says so.
+    "examples/calibrate": [
+        (
+            "home-on-enter",
+            '        yes = answer is not None and answer.lower() == "y"',
+            "        yes = answer is not None",
+            "Enter alone homes the arm: under power without a yes",
+        ),
+        (
+            "home-on-a-long-press",
+            'held 1 s: no" % DPS) == ""',
+            'held 1 s: no" % DPS) is not None',
+            "a 1 s press, which says no, homes the arm",
+        ),
+        (
+            "home-fast",
+            "DPS = 30  # the first home()",
+            "DPS = 300  # the first home()",
+            "the first home goes at 300 degrees/s",
+        ),
+        (
+            "saves-what-it-refused",
+            "    elif cal.problems():",
+            "    elif False:",
+            "a calibration with a joint it cannot trust ends in a traceback, not the joint's "
+            "name and why",
+        ),
+        (
+            "no-opt-in",
+            "if not I_HAVE_CHECKED_MY_ROBOT:",
+            "if False:",
+            "the joints go limp (the arm falls) before the maker said they hold it",
+        ),
+    ],
 }
 
 # Survivors that change nothing a user could see (equivalent mutants): name -> why.
@@ -1091,9 +1410,15 @@ FAIL_LINE = re.compile(r" FAIL$")
 TEST_LINE = re.compile(r"^(test\S*) \((\S+)\) \.\.\.")
 
 
-def find(lib, module, old, new):
-    """The mutant's line number in lib/module.py, or why it is refused."""
-    with open(os.path.join(lib, module + ".py")) as f:
+def source(module):
+    """The file a module's mutants change, in the checkout: lib/module.py, or module.py for
+    one with a folder (examples/calibrate)."""
+    return module + ".py" if "/" in module else os.path.join("lib", module + ".py")
+
+
+def find(root, module, old, new):
+    """The mutant's line number in the module's file under root, or why it is refused."""
+    with open(os.path.join(root, source(module))) as f:
         text = f.read()
     count = text.count(old)
     if old == new:
@@ -1125,7 +1450,7 @@ def copy_repo(scratch, module=None, old=None, new=None):
         )
 
     if module:
-        path = os.path.join(src, module + ".py")
+        path = os.path.join(repo, source(module))
         with open(path) as f:
             text = f.read()
         with open(path, "w") as f:
@@ -1310,7 +1635,7 @@ def mutant(module, index, failing):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("modules", nargs="*", help="busservo, busservo_motion, busservo_web")
+    parser.add_argument("modules", nargs="*", help=", ".join(MUTANTS))
     parser.add_argument("--list", action="store_true", help="list the mutants, run nothing")
     parser.add_argument("--only", help="MODULE:N,... run these mutants only (N from --list)")
     parser.add_argument("--no-baseline", action="store_true", help="skip the unchanged run")
@@ -1330,11 +1655,10 @@ def main():
     else:
         chosen = [(m, i) for m in modules for i in range(len(MUTANTS[m]))]
 
-    lib = os.path.join(ROOT, "lib")
     refused = 0
     for module, i in chosen:
         name, old, new, why = MUTANTS[module][i]
-        line, wrong = find(lib, module, old, new)
+        line, wrong = find(ROOT, module, old, new)
         if wrong:
             refused += 1
             print("%s:%d %s: REFUSED, %s" % (module, i, name, wrong))
