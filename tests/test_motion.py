@@ -560,31 +560,39 @@ class Stream(Tidy):
         return seen, starts, idle
 
     def test_a_slowed_joint_turns_back_within_two_frames_when_its_target_does(self):
-        # A slider dragged to 90 degrees, then back, a joint of 60 degrees/s following it (a
-        # 100 Hz loop, a target every 20 ms): the servo turns back within 60 ms of the new
-        # target, 15 positions (3.6 degrees) past where it was, from mid-way, after the loop
-        # ran a second with nothing streamed, or after a second held at its target. A step
-        # that took the whole pause's way, or what was owed while it waited, would commit it
-        # to a glide of a second and more, deaf to the slider meanwhile.
-        for name, before in (("mid-way", []), ("paused", [(1000, None)]), ("held", [(1000, 0)])):
-            phases = before + [(400, 90), (300, -90)]
-            seen, starts, _ = self.slowed(60, 10, 20, phases)
-            turn = starts[-1]
-            peak = max(range(turn, len(seen)), key=lambda t: seen[t])
-            why = (name, peak - turn, seen[turn], seen[peak])
-            self.assertTrue(peak - turn <= 60 and seen[peak] - seen[turn] <= 15, why)
-            self.assertTrue(seen[turn] - seen[starts[-2]] >= 80, why)  # it went, 100 at most
+        # A slider dragged to 90 degrees (or -90), then back, a joint of 60 degrees/s
+        # following it (a 100 Hz loop, a target every 20 ms): the servo turns back within
+        # 60 ms of the new target, 15 positions (3.6 degrees) past where it was, from
+        # mid-way, after the loop ran a second with nothing streamed, or after a second held
+        # at its target. A step that took the whole pause's way, or what was owed while it
+        # waited, or the whole way down, would commit it to a glide of a second and more,
+        # deaf to the slider meanwhile.
+        for way in (1, -1):
+            for name, before in (
+                ("mid-way", []),
+                ("paused", [(1000, None)]),
+                ("held", [(1000, 0)]),
+            ):
+                phases = before + [(400, 90 * way), (300, -90 * way)]
+                seen, starts, _ = self.slowed(60, 10, 20, phases)
+                turn = starts[-1]
+                peak = max(range(turn, len(seen)), key=lambda t: way * seen[t])
+                why = (way, name, peak - turn, seen[turn], seen[peak])
+                self.assertTrue(peak - turn <= 60 and way * (seen[peak] - seen[turn]) <= 15, why)
+                went = way * (seen[turn] - seen[starts[-2]])
+                self.assertTrue(went >= 80, why)  # it went, 100 at most
 
     def test_a_joints_dps_holds_sampled_every_ms_whatever_the_loops_period(self):
-        # As above, with step() every 10 or 20 ms, and targets every 10 to 100 ms: over any
-        # 100 ms on its way, the servo turns no more than its dps allows (250 positions/s at
-        # 60 degrees/s: 25), and 2 for the rounding to whole positions at each end. A frame
-        # that went before the servo was there would send it the rest of its glide and the
-        # next step in one frame's time: faster than its dps.
+        # As above, with step() every 10 or 20 ms, and targets every 10 to 100 ms, up and
+        # down: over any 100 ms on its way, the servo turns no more than its dps allows (250
+        # positions/s at 60 degrees/s: 25), and 2 for the rounding to whole positions at each
+        # end. A frame that went before the servo was there would send it the rest of its
+        # glide and the next step in one frame's time: faster than its dps.
         for loop_ms, pace in ((10, 10), (10, 50), (20, 20), (20, 100)):
-            seen, _, _ = self.slowed(60, loop_ms, pace, [(1200, 120)])  # 2 s to get there
-            fastest = max(abs(seen[t + 100] - seen[t]) for t in range(len(seen) - 100))
-            self.assertTrue(fastest <= 25 + 2, (loop_ms, pace, fastest))
+            for target in (120, -120):  # 2 s to get there
+                seen, _, _ = self.slowed(60, loop_ms, pace, [(1200, target)])
+                fastest = max(abs(seen[t + 100] - seen[t]) for t in range(len(seen) - 100))
+                self.assertTrue(fastest <= 25 + 2, (loop_ms, pace, target, fastest))
 
     def test_a_slowed_joint_goes_at_its_dps_not_slower(self):
         # 60 degrees/s with a 100 Hz loop and a target every tick, 30 with a 50 Hz loop: over
