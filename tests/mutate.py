@@ -36,10 +36,18 @@ unconfirmed, the mutant is "killed?", and not counted as killed.
 A mutant that survives, and that no test should kill, has a note in NOTES saying why it
 changes nothing a user could see; a survivor without one wants a test.
 
-The pass of 2026-11-25, on a loaded 2-core machine (busservo.py took about 40 minutes):
-busservo.py 39 of 40 killed, busservo_motion.py 31 of 31, busservo_web.py 29 of 30; the two
-survivors are the equivalent ones in NOTES. Before the tests that pass brought, the suite
-killed 33 of 40, 25 of 31 and 20 of 30 (4 more failed once under load, not confirmed).
+The pass of 2026-11-25 (evening), 203 mutants one at a time on a 2-core machine that others
+were running the suite on (load 0.1 to 6.6, median 2.5), took 27 minutes (busservo.py 9,
+busservo_web.py 12, the baselines 2): busservo.py 63 of 65 killed, busservo_motion.py 40 of
+40, busservo_web.py 49 of 51, busservo_arm.py 23 of 23, busservo_calibrate.py 19 of 19,
+examples/calibrate.py 5 of 5; the 4 survivors are the equivalent ones in NOTES. Before the
+tests this pass brought, the suite killed busservo_web.py's 40 of 51, busservo_arm.py's 19
+of 23, busservo_calibrate.py's 18 of 19, examples/calibrate.py's 3 of 5, and 4 of the 10
+mutants of Robot.step()'s new stepping (and step-dps-one-way, killed before step() changed,
+survived the change). busservo.py's 63 of 65 count the 5 tests the pass began with, which
+fail on the mutants one-byte-header, unknown-command-a-frame, positions-unasked-taken,
+asked-counts-never-forgotten, positions-any-count-taken, forget-unmasked and
+finish-part-not-counted.
 """
 
 import argparse
