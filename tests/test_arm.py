@@ -129,6 +129,17 @@ class Geometry(Tidy):
             raises(lambda t=target, p=pitch: a.pose(*t, pitch=p - 0.1), "out of reach")
             a.pose(*target, pitch=pitch + 0.1)
 
+    def test_where_a_joints_limit_is_in_the_way_the_pitch_is_at_its_edge(self):
+        # Near the base, the wrist's limit (120 degrees) keeps the hand from pointing down,
+        # not the reach: the pitch is the limit's edge, to 1/32 degree. 1/16 nearer -90 is
+        # refused, naming the wrist.
+        a = arm(None)
+        for target in ((0, 50, 100), (0, -120, 125), (0, 0, 175)):
+            pitch = a.point(a.pose(*target))[3]
+            self.assertTrue(-90 < pitch < 0, (target, pitch))
+            a.pose(*target, pitch=pitch)
+            raises(lambda t=target, p=pitch: a.pose(*t, pitch=p - 1 / 16), "the wrist would be")
+
     def test_a_point_on_the_base_axis_keeps_the_base_where_it_is(self):
         w, bus = world()
         a = arm(bus)
@@ -387,6 +398,18 @@ class Calibration(Tidy):
             os.chdir(here)
             sh("rm -rf " + folder)
 
+    def test_an_arm_loaded_elbow_down_solves_elbow_down(self):
+        w, bus = world()
+        path = scratch("arm") + ".json"
+        joints = {name: bm.Joint(i + 1) for i, name in enumerate(ba.JOINTS)}  # no limits
+        try:
+            ba.Arm(bm.Robot(bus, joints), LINKS).save(path)
+            down = ba.Arm.load(bus, path, elbow_up=False)
+        finally:
+            os.remove(path)
+        self.assertFalse(down.elbow_up)
+        self.assertTrue(down.pose(250, 50, 100, -30)["elbow"] < 0)
+
     def test_a_file_that_is_no_arm_says_which_and_why(self):
         w, bus = world()
         path = scratch("arm") + ".json"
@@ -496,6 +519,58 @@ class Lines(Tidy):
         self.assertTrue(1765 <= line.ms <= 1775, line.ms)
         self.follow(w, bus, line)
         self.assertEqual(r.slowed, slowed)  # never too fast: the robot never slowed a frame
+
+    def test_a_late_loop_slows_the_line_rather_than_jumping_along_it(self):
+        # The loop is away for 500 ms (a garbage collection, a blocking read) mid-line: the
+        # next frame goes on by 100 ms of the line (5 mm at 50 mm/s), not by the 500 ms
+        # missed (25 mm in one frame's 20 ms: a lurch), and the line ends 400 ms late.
+        w, bus = world()
+        a = arm(bus)
+        a.move_to(*self.START, pitch=-90, ms=0)
+        settle(w, bus, 50)
+        first = w.frames_total
+        line = a.line_to(*self.END, pitch=-90, mm_s=50)
+        for _ in range(1000):
+            line.step()
+            settle(w, bus, 1)
+        settle(w, bus, 500)
+        took, _ = self.follow(w, bus, line)
+        points = [sent_point(a, frame_positions(f)) for f in w.frames(first)]
+        pairs = zip(points, points[1:])
+        steps = [math.sqrt(sum((b - a) ** 2 for a, b in zip(p[:3], q[:3]))) for p, q in pairs]
+        self.assertTrue(max(steps) <= 5.2, max(steps))
+        self.assertTrue(1000 + 500 + took >= 4400, took)
+
+    def test_stop_drops_the_point_streamed_but_not_yet_sent(self):
+        # A loop that steps the robot for the gripper, then the line: the line streams a
+        # point the robot's own step() then holds back (the wire was busy just now). After
+        # line.stop(), the gripper's frames carry the gripper alone: the arm stays where the
+        # line's last frame put it.
+        w, bus = world()
+        a = arm(bus, more=True)
+        r = a.robot
+        a.move_to(*self.START, pitch=-90, ms=0)
+        settle(w, bus, 50)
+        line = a.line_to(*self.END, mm_s=50)
+        for _ in range(2000):
+            r.step()
+            sent = line.updates
+            line.step()
+            held = line.updates == sent and r._fresh  # streamed, not sent
+            if held:
+                break
+            settle(w, bus, 1)
+        self.assertTrue(held)
+        line.stop()
+        settle(w, bus, 50)
+        first = w.frames_total
+        for k in range(10):
+            r.stream({"gripper": 30 + k})
+            r.step()
+            settle(w, bus, 30)
+        got = [frame_positions(f) for f in w.frames(first)]
+        self.assertEqual(len(got), 10)
+        self.assertTrue(all(sorted(p) == [6] for p in got), got)
 
     def test_stop_and_estop_end_the_line_and_send_nothing_more(self):
         w, bus = world()

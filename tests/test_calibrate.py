@@ -168,6 +168,23 @@ class Steps(unittest.TestCase):
         self.assertJoints(cal.joints(), JOINTS)
         self.assertEqual(cal.samples, 11)
 
+    def test_the_sweep_may_start_anywhere_and_go_either_way(self):
+        # From the rest pose up to one end, down to the other, and back to the rest pose: the
+        # same calibration as one sweep from end to end.
+        cal = self.cal
+        top = {servo_id: b for servo_id, (a, b) in ENDS.items()}
+        bottom = {servo_id: a for servo_id, (a, b) in ENDS.items()}
+        cal.limp()
+        turn(self.w, REST)
+        cal.rest()
+        for start, end in ((REST, top), (top, bottom), (bottom, REST)):
+            for k in range(11):
+                turn(self.w, {i: start[i] + (end[i] - start[i]) * k // 10 for i in start})
+                cal.sample()
+        turn(self.w, NUDGED)
+        cal.nudge()
+        self.assertJoints(cal.joints(), JOINTS)
+
     def test_a_pwm_joint_is_calibrated_in_its_own_units(self):
         # A PWM servo: 500..2500 us over 180 degrees, 1500 at its centre. (On the simulator
         # only: a real one cannot tell the controller where a hand turned it.)
@@ -516,6 +533,30 @@ def button():
 """
 
 
+# As BUTTON, but the person holds the fourth press, the home's, for 1.5 s: no.
+HELD_AT_HOME = """
+
+class Button:
+    held = 0  # looks it is held down for yet
+
+    def value(self):
+        if self.held:
+            self.held -= 1
+            if not self.held:  # let go
+                board.presses += 1
+        elif board.presses != 1 or board.reads >= 13:
+            self.held = 150 if board.presses == 3 else 1  # a look each 10 ms
+        return 0 if self.held else 1
+
+
+pin = Button()
+
+
+def button():
+    return pin
+"""
+
+
 # What the example shows once the person has swept every joint, and nudged them.
 SEEN = "base 177, shoulder 144, elbow 170, wrist 168, gripper 96"
 NUDGE = "base +11, shoulder -11, elbow +10, wrist -12, gripper +12"
@@ -647,6 +688,18 @@ class Example(unittest.TestCase):
             self.assertIn(line, out)
         with open(self.dir + "/robot.json") as f:
             self.assertFalse("links" in json.loads(f.read()))  # no keys: no links
+
+    def test_with_the_boards_button_held_1_s_there_is_no_home(self):
+        self.write("board.py", BOARD % (True, REST, ENDS, NUDGED) + HELD_AT_HOME)
+        ok, out = sh(
+            "cd %s && sh %s/boards/unix.sh calibrate.py </dev/null" % (self.dir, os.getcwd())
+        )
+        self.assertTrue(ok, out)
+        self.assertIn("saved robot.json:", out)
+        self.assertIn("no home: the joints stay limp", out)
+        with open(self.dir + "/log") as f:
+            taken = [int(line.split()[0]) for line in f.read().split("\n") if line]
+        self.assertFalse(MOVE in taken, taken)
 
     def test_no_home_unless_the_person_says_y(self):
         ok, out, taken = self.run_typed(

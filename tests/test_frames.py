@@ -268,6 +268,15 @@ class Resync(unittest.TestCase):
         # 55 55 05 07 is no STOP; the 55 55 02 07 inside it is.
         self.assertFrames(b"\x55\x55\x05\x07\x55\x55\x02\x07", [CMD_ACTION_GROUP_STOP])
 
+    def test_one_0x55_starts_no_frame(self):
+        # Two 0x55 start a frame: 55 00 02 07 is no STOP, nor 55 54 04 0F 4C 1D (a bit of
+        # the header flipped) a battery reply.
+        self.assertFrames(
+            b"\x55\x00\x02\x07" + b"\x55\x54\x04\x0f\x4c\x1d" + RUN_8_ONCE,
+            [CMD_ACTION_GROUP_RUN],
+            {"noise": 10, "battery": None, "running": True},
+        )
+
     def test_frames_of_commands_the_controller_does_not_send_are_noise(self):
         # Only RUN, STOP, COMPLETE, battery and positions come from the
         # controller. Trusting another command's Length would let three bytes
@@ -279,6 +288,16 @@ class Resync(unittest.TestCase):
             drain(bus), [CMD_ACTION_GROUP_STOP, CMD_GET_BATTERY_VOLTAGE, CMD_ACTION_GROUP_RUN]
         )
         self.assertEqual(bus.noise, 4 + len(UNKNOWN_255))
+
+    def test_a_length_4_frame_of_another_command_is_no_battery_reply(self):
+        # The battery reply's Length is 4; so is that of unload([1, 2]) (55 55 04 14 01 02),
+        # the driver's own frame read back, and of noise that looks like a frame. Only
+        # the command makes a battery reply.
+        self.assertFrames(
+            b"\x55\x55\x04\x14\x01\x02" + b"\x55\x55\x04\x63\x01\x02" + BATTERY_7500,
+            [CMD_GET_BATTERY_VOLTAGE],
+            {"noise": 12, "battery": 7500},
+        )
 
     def test_commands_the_driver_sends_are_frames_too(self):
         # The RUN and STOP the driver sends are the frames the controller sends

@@ -586,6 +586,79 @@ class Stream(Tidy):
             self.assertEqual(got[-1][1], {1: position}, target)
             self.assertEqual(w.sim.position(1), position, target)
 
+    def slowed(self, dps, loop_ms, pace, phases):
+        """A joint of dps at 0 degrees (read), then phases of (ms, target): step() every
+        loop_ms, target streamed every pace ms (None: nothing). The servo's position each
+        ms, the ms each phase starts at, and the ms the wire was idle."""
+        w, bus = world()
+        robot = bm.Robot(bus, {"j1": bm.Joint(1, dps=dps)})
+        robot.where()
+        seen, starts, idle = [], [], 0
+        for ms, target in phases:
+            starts.append(len(seen))
+            for t in range(ms):
+                if target is not None and t % pace == 0:
+                    robot.stream({"j1": target})
+                if len(seen) % loop_ms == 0:
+                    robot.step()
+                idle += bus.wire_ms() == 0
+                settle(w, bus, 1)
+                seen.append(w.sim.position(1))
+        return seen, starts, idle
+
+    def test_a_slowed_joint_turns_back_within_two_frames_when_its_target_does(self):
+        # A slider dragged to 90 degrees (or -90), then back, a joint of 60 degrees/s
+        # following it (a 100 Hz loop, a target every 20 ms): the servo turns back within
+        # 60 ms of the new target, 15 positions (3.6 degrees) past where it was, from
+        # mid-way, after the loop ran a second with nothing streamed, or after a second held
+        # at its target. A step that took the whole pause's way, or what was owed while it
+        # waited, or the whole way down, would commit it to a glide of a second and more,
+        # deaf to the slider meanwhile.
+        for way in (1, -1):
+            for name, before in (
+                ("mid-way", []),
+                ("paused", [(1000, None)]),
+                ("held", [(1000, 0)]),
+            ):
+                phases = before + [(400, 90 * way), (300, -90 * way)]
+                seen, starts, _ = self.slowed(60, 10, 20, phases)
+                turn = starts[-1]
+                peak = max(range(turn, len(seen)), key=lambda t: way * seen[t])
+                why = (way, name, peak - turn, seen[turn], seen[peak])
+                self.assertTrue(peak - turn <= 60 and way * (seen[peak] - seen[turn]) <= 15, why)
+                went = way * (seen[turn] - seen[starts[-2]])
+                self.assertTrue(went >= 80, why)  # it went, 100 at most
+
+    def test_a_joints_dps_holds_sampled_every_ms_whatever_the_loops_period(self):
+        # As above, with step() every 10 or 20 ms, and targets every 10 to 100 ms, up and
+        # down: over any 100 ms on its way, the servo turns no more than its dps allows (250
+        # positions/s at 60 degrees/s: 25), and 2 for the rounding to whole positions at each
+        # end. A frame that went before the servo was there would send it the rest of its
+        # glide and the next step in one frame's time: faster than its dps.
+        for loop_ms, pace in ((10, 10), (10, 50), (20, 20), (20, 100)):
+            for target in (120, -120):  # 2 s to get there
+                seen, _, _ = self.slowed(60, loop_ms, pace, [(1200, target)])
+                fastest = max(abs(seen[t + 100] - seen[t]) for t in range(len(seen) - 100))
+                self.assertTrue(fastest <= 25 + 2, (loop_ms, pace, target, fastest))
+
+    def test_a_slowed_joint_goes_at_its_dps_not_slower(self):
+        # 60 degrees/s with a 100 Hz loop and a target every tick, 30 with a 50 Hz loop: over
+        # any 500 ms of its way the servo goes 90 % of what its dps allows (125 and 62
+        # positions), at least. A step() that let the loop's period go unpaid each frame
+        # would run it at four fifths of its dps, or three fifths.
+        for dps, loop_ms, most in ((60, 10, 125), (30, 20, 62)):
+            seen, _, _ = self.slowed(dps, loop_ms, loop_ms, [(1200, 120)])
+            slowest = min(seen[t + 500] - seen[t] for t in range(100, len(seen) - 500))
+            self.assertTrue(slowest >= 0.9 * most, (dps, loop_ms, slowest))
+
+    def test_a_slowed_joint_leaves_the_wire_free_between_its_frames(self):
+        # 30 degrees/s, a target every 50 ms, step() every ms: a frame goes once the servo is
+        # where the last one sent it, about one a glide, and the wire is idle most of the time,
+        # for queries and the panel's reads. Frames at every free moment would fill it.
+        seen, _, idle = self.slowed(30, 1, 50, [(1000, 120)])
+        self.assertTrue(idle >= 700, idle)
+        self.assertTrue(seen[-1] - seen[0] >= 110, seen[-1])  # and it went on
+
     def test_a_move_ends_the_stream_and_its_old_targets_never_follow(self):
         w, bus = world()
         a = arm(bus)

@@ -149,6 +149,22 @@ class Wire(unittest.TestCase):
             self.assertEqual(got, [CMD_ACTION_GROUP_STOP] * 70, port)
             self.assertEqual((bus.positions, bus.noise), ({}, 5), port)
 
+    def test_a_positions_frame_no_request_in_flight_asked_for_is_noise(self):
+        # Positions come only in reply. Once read_positions([1, 2]) has had its answer,
+        # 55 55 09 15 02 ... again (noise, a reply given up on and forgotten) is noise and
+        # moves no position; so it is while a request for 3 servos is in flight.
+        two = b"\x55\x55\x09\x15\x02\x01\x6f\x00\x02\xde\x00"  # 1: 111, 2: 222
+        for port, w, bus in ports():
+            self.assertEqual(bus.read_positions([1, 2]), {1: 500, 2: 500}, port)
+            w.noise(two + STOP)
+            self.assertEqual(settle(w, bus, 30), [CMD_ACTION_GROUP_STOP], port)
+            bus.request_positions([1, 2, 3])
+            w.noise(two + STOP)  # before the reply, which comes behind it
+            got = settle(w, bus, 60)
+            self.assertEqual(got, [CMD_ACTION_GROUP_STOP, CMD_MULT_SERVO_POS_READ], port)
+            self.assertEqual(bus.positions, {1: 500, 2: 500, 3: 500}, port)
+            self.assertEqual(bus.noise, 2 * len(two), port)
+
     def test_a_frame_whose_rest_came_while_the_loop_was_away_is_read_not_dropped(self):
         # A reply is half in; poll() asks any() for more: none yet. Then the loop is away
         # (a garbage collection, a callback, another task) for 40 ms, and the rest comes
@@ -249,6 +265,31 @@ class Wire(unittest.TestCase):
                         wrong.append((asked, got))
                 why = (port, late, wrong)
                 self.assertTrue(len(wrong) <= 1 and asked > 30, why)
+
+    def test_a_reply_seconds_late_on_ticks_past_2_to_the_30_makes_one_answer_wrong_at_most(self):
+        # As above, on the unix port's ticks after 12.4 days up. When the requests given up
+        # on left the wire is kept modulo 2**30, as the wire's times are, and must be
+        # compared alike: compared unmasked, it looks ages old, they are forgotten at once,
+        # and the replies on their way behind the late one answer the wrong queries.
+        for port in wire.PORTS:
+            for late in (1500, 3000):
+                w = wire.World(port, clock=UnixTicks())
+                busservo.time = w.clock
+                bus = busservo.BusServo(w.uart)
+                w.late(late)
+                self.assertTrue(timed_out(bus.read_battery), port)
+                wrong = []
+                asked = 0
+                while w.clock.now_us < (late + 600) * 1000:
+                    asked += 1
+                    w.sim.battery = 7000 + asked
+                    try:
+                        got = bus.read_battery()
+                    except OSError:
+                        continue
+                    if got != 7000 + asked:
+                        wrong.append((asked, got))
+                self.assertTrue(len(wrong) <= 1 and asked > 30, (port, late, wrong))
 
     def test_a_position_reply_over_half_a_second_late_makes_one_answer_wrong_at_most(self):
         for port in wire.PORTS:
@@ -447,6 +488,18 @@ class Wire(unittest.TestCase):
                 ahead = bus.wire_ms() - w.tx_backlog_us() // 1000
                 self.assertTrue(0 <= ahead <= 2, (port, start, ahead))
                 self.assertEqual(bus.read_battery(), 7500, (port, start))
+
+    def test_a_frame_the_uart_took_part_of_is_counted_whole(self):
+        # The transmit buffer (256 bytes) holds a 67-byte move; of the next, 253 bytes, an
+        # rp2 takes what fits at once and the rest as room comes. All of it is on the wire,
+        # and all counted: were the part taken at once left out, wire_ms() would be 230 ms
+        # short, and the query behind would time out.
+        for port, w, bus in ports():
+            bus.move_many([(s, 500) for s in range(1, 21)], 100)  # 67 bytes
+            bus.move_many([(s, 500) for s in range(1, 84)], 100)  # 253 bytes
+            ahead = bus.wire_ms() - w.tx_backlog_us() // 1000
+            self.assertTrue(0 <= ahead <= 2, (port, bus.wire_ms(), ahead))
+            self.assertEqual(bus.read_battery(), 7500, port)
 
     def test_wire_ms_counts_10_bits_a_byte(self):
         for port, w, bus in ports():

@@ -171,6 +171,24 @@ class Page(Tidy):
 
         run(scenario)
 
+    def test_head_gets_the_pages_headers_alone(self):
+        async def scenario(port, world, robot):
+            reader, writer = await asyncio.open_connection("127.0.0.1", port)
+            await writer.awrite(b"HEAD / HTTP/1.0\r\n\r\n")
+            reply = b""
+            while True:
+                part = await reader.read(1024)
+                if not part:
+                    break
+                reply += part
+            await writer.aclose()
+            head, _, body = reply.partition(b"\r\n\r\n")
+            size = os.stat("lib/busservo_web.html.gz")[6]
+            self.assertIn(b"\r\nContent-Length: %d\r\n" % size, head + b"\r\n")
+            self.assertEqual(body, b"")
+
+        run(scenario)
+
     def test_an_answers_length_is_counted_in_bytes(self):
         # A joint's name may be é: the Content-Length counts the bytes sent, or the browser
         # cuts the answer short.
@@ -523,6 +541,75 @@ class BadInput(Tidy):
 
         run(scenario)
 
+    def test_a_negative_content_length_is_refused_whatever_follows_it(self):
+        # Content-Length: -1, then a login's JSON and a byte more: 400, not a login read from
+        # whatever bytes happened to come with the head.
+        async def scenario(port, world, robot):
+            body = b'{"password": "%s"}}' % PASSWORD.encode()
+            head = b"POST /api/login HTTP/1.0\r\nContent-Length: -1\r\n\r\n"
+            reply = await send(port, head + body)
+            self.assertEqual(reply[:12], b"HTTP/1.0 400", reply)
+
+        run(scenario)
+
+    def test_a_body_over_1_kb_is_read_before_the_413_goes(self):
+        # A connection closed with its request unread is reset (on a board, lwIP resets it
+        # at once: the 413 on its way is lost, and the page sees a network error). So the
+        # body, up to 8 KB, is read first: here, every byte of 3 KB.
+        async def scenario(port, world, robot):
+            token = await login(port)
+            panel = _panels[-1]
+            serve = panel.handle_request
+            counts = []  # of the bytes each read got
+
+            class Counted:
+                def __init__(self, stream):
+                    self.stream = stream
+
+                async def read(self, n=-1):
+                    data = await self.stream.read(n)
+                    counts.append(len(data))
+                    return data
+
+                async def awrite(self, data):
+                    await self.stream.awrite(data)
+
+                def get_extra_info(self, name):
+                    return self.stream.get_extra_info(name)
+
+                async def aclose(self):
+                    await self.stream.aclose()
+
+            def handle_request(reader, writer):
+                stream = Counted(writer)  # reader and writer: one stream
+                return serve(stream, stream)
+
+            panel.handle_request = handle_request
+            body = b'{"x": "' + b"a" * 3000 + b'"}'
+            status, reply = await http(port, "POST", "/api/target", token=token, raw=body)
+            panel.handle_request = serve
+            self.assertEqual(status, 413)
+            self.assertTrue(sum(counts) >= len(body), counts)
+
+        run(scenario)
+
+    def test_connections_that_say_nothing_are_pushed_out_by_newer_ones_at_once(self):
+        # Each holds a socket (a board has a dozen or so): the fifth to connect pushes out
+        # the first, closed at once rather than when its second is up.
+        async def scenario(port, world, robot):
+            idle = []
+            for _ in range(5):
+                idle.append(await asyncio.open_connection("127.0.0.1", port))
+                await asyncio.sleep_ms(5)
+            start = time.ticks_ms()
+            reader, _ = idle[0]
+            self.assertEqual(await asyncio.wait_for_ms(reader.read(100), 2000), b"")
+            self.assertTrue(time.ticks_diff(time.ticks_ms(), start) < 500)
+            for _, writer in idle:
+                await writer.aclose()
+
+        run(scenario)
+
     def test_sequence_names_cannot_leave_their_folder(self):
         async def scenario(port, world, robot):
             token = await login(port)
@@ -574,6 +661,27 @@ class Driving(Tidy):
             self.assertFalse(reply["armed"])
             status, reply = await http(port, "POST", "/api/target", {"targets": {"base": 9}}, mine)
             self.assertEqual(status, 409)  # the stop disarmed it
+
+        run(scenario)
+
+    def test_a_page_that_arms_while_another_has_it_armed_is_told_so_and_reads_nothing(self):
+        # Refused at once, saying why: no "arm again", and no read of the positions, nor a
+        # hold of the armed page's stream, as arming does.
+        async def scenario(port, world, robot):
+            await armed(port)
+            other = await login(port)
+            panel = _panels[-1]
+            where = panel.where
+            reads = []
+
+            async def counted(names=None):
+                reads.append(names)
+                return await where(names)
+
+            panel.where = counted
+            status, reply = await http(port, "POST", "/api/arm", {"on": True}, other)
+            self.assertEqual((status, reply["error"]), (409, "another page has the panel armed"))
+            self.assertEqual(reads, [])
 
         run(scenario)
 
@@ -868,6 +976,62 @@ class NeverWaits(Tidy):
 
         run(scenario)
 
+    def slow_reads(self, ms, before=False):
+        """The panel's reads for its routes (where()) take ms longer: before the read, or
+        between its reply and the route going on."""
+        panel = _panels[-1]
+        where = panel.where
+
+        async def slow(names=None):
+            if before:
+                await asyncio.sleep_ms(ms)
+            pose = await where(names)
+            if not before:
+                await asyncio.sleep_ms(ms)
+            return pose
+
+        panel.where = slow
+
+    def test_a_drag_after_a_stop_is_not_undone_by_the_stops_halt(self):
+        # STOP mid-pose: the halt reads where the joints are, then sends them there, unless
+        # something was ordered meanwhile. A slider dragged just after STOP wins: the base
+        # stays at 30 degrees, not sent back to where the halt's read found it.
+        async def scenario(port, world, robot):
+            token = await armed(port)
+            await http(port, "POST", "/api/add", {"ms": 20000}, token)
+            await http(port, "POST", "/api/play", {}, token)
+            await asyncio.sleep_ms(200)
+            self.slow_reads(300)
+            await http(port, "POST", "/api/stop", {}, token)
+            await asyncio.sleep_ms(100)  # the halt's read has come: it waits to go on
+            status, reply = await http(
+                port, "POST", "/api/target", {"targets": {"base": 30}}, token
+            )
+            self.assertEqual(status, 200, reply)
+            self.assertTrue(await until(lambda: at(world, robot, "base", 30)))
+            await asyncio.sleep_ms(500)  # the halt would have sent the base back
+            self.assertTrue(at(world, robot, "base", 30), world.sim.position(1))
+
+        run(scenario)
+
+    def test_a_stop_while_arming_reads_leaves_the_panel_disarmed(self):
+        # Arming reads where the joints are first; an estop meanwhile wins: the arming is
+        # refused (arm again), and the panel is not armed after the stop.
+        async def scenario(port, world, robot):
+            token = await login(port)
+            self.slow_reads(300, before=True)
+            arming = asyncio.create_task(http(port, "POST", "/api/arm", {"on": True}, token))
+            await asyncio.sleep_ms(100)
+            status, reply = await http(port, "POST", "/api/estop", {}, token)
+            self.assertEqual(status, 200, reply)
+            status, reply = await arming
+            self.assertEqual(status, 409, reply)
+            self.assertIn("stopped, or armed elsewhere, while arming: arm again", reply["error"])
+            status, reply = await http(port, "GET", "/api/state", token=token)
+            self.assertFalse(reply["armed"])
+
+        run(scenario)
+
 
 def busservo_web_armed(robot):
     return _panels[-1].armed is not None if _panels else None
@@ -967,6 +1131,65 @@ class AlwaysAnswers(Tidy):
             self.assertEqual(status, 200)
 
         run(scenario)
+
+    def test_a_logged_in_page_gets_503_once_twice_the_clients_are_being_answered(self):
+        # Four wrong passwords (half a second each) and four logged-in captures (a slow
+        # controller: a second each) are being answered: the ninth, logged in or not, gets
+        # 503. Each answer takes RAM.
+        async def scenario(port, world, robot):
+            token = await login(port)
+            panel = _panels[-1]
+            where = panel.where
+
+            async def slow(names=None):
+                await asyncio.sleep_ms(1000)
+                return await where(names)
+
+            panel.where = slow
+            busy = [
+                asyncio.create_task(http(port, "POST", "/api/login", {"password": "x" * 9}))
+                for _ in range(4)
+            ]
+            await asyncio.sleep_ms(100)
+            for _ in range(4):
+                busy.append(asyncio.create_task(http(port, "POST", "/api/capture", {}, token)))
+            await asyncio.sleep_ms(100)
+            status, reply = await http(port, "GET", "/api/state", token=token)
+            self.assertEqual((status, reply), (503, {"error": "too many clients"}))
+            for task in busy:
+                self.assertTrue((await task)[0] in (200, 401))
+            status, _ = await http(port, "GET", "/api/state", token=token)
+            self.assertEqual(status, 200)
+
+        run(scenario)
+
+    def test_an_answer_that_stalls_is_cut_with_503_and_frees_its_place(self):
+        # An answer has _CLIENT_MS (here 300 ms): one that stalls past it (a client that
+        # reads nothing, on a board) is cut, told 503 if it had not begun, and its place
+        # taken back.
+        async def scenario(port, world, robot):
+            token = await login(port)
+            panel = _panels[-1]
+
+            async def stall(body, token):
+                await asyncio.sleep_ms(5000)
+
+            panel._get_state = stall
+            request = b"GET /api/state HTTP/1.0\r\nAuthorization: Bearer %s\r\n\r\n"
+            reader, writer = await asyncio.open_connection("127.0.0.1", port)
+            line, ms = await answered(reader, writer, request % token.encode())
+            self.assertEqual(line, b"HTTP/1.0 503 Service Unavailable\r\n", ms)
+            self.assertEqual(panel._clients, 0)
+            del panel._get_state
+            status, _ = await http(port, "GET", "/api/state", token=token)
+            self.assertEqual(status, 200)
+
+        kept = busservo_web._CLIENT_MS
+        busservo_web._CLIENT_MS = 300
+        try:
+            run(scenario)
+        finally:
+            busservo_web._CLIENT_MS = kept
 
     def test_a_failure_before_the_status_gets_503_after_it_a_close_and_the_server_goes_on(self):
         page = b"GET / HTTP/1.0\r\n\r\n"
