@@ -221,7 +221,7 @@ class Robot:
         now = time.ticks_ms()
         self._given = self._given_before = self._stepped = self._sent = now
         self._ms = 0  # the move time of the last frame step() sent
-        self._slowing = False  # that frame slowed a joint to its dps
+        self._slowing = False  # that frame slowed a joint to its dps (or glides longer than asked)
         self._owed = [0] * n  # a slowed joint's way not yet taken, in 1/1000 positions
         self.frame_ms = 0  # a stream frame's time on the wire, in ms (0: none sent yet)
         self._frame_n = 0  # the joints in the frame it was measured on
@@ -488,7 +488,7 @@ class Robot:
         self.bus.move_many(live, glide)
         self._sent = now
         self._ms = glide
-        self._slowing = fresh
+        self._slowing = fresh or glide > ms  # still on its way: the next frame waits
         for k in range(len(live)):
             at[self._live_i[k]] = live[k][1]
         if fresh:

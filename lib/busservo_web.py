@@ -625,10 +625,10 @@ class Panel:
                 await asyncio.wait_for_ms(self._dispatch(conn, request), _CLIENT_MS)
             finally:
                 self._clients -= 1
-        except OSError:
-            pass  # the client has gone
-        except Exception:  # out of memory, say, or an answer over _CLIENT_MS
-            if not (conn and conn.sent):
+        except Exception as e:  # out of memory, say, or an answer over _CLIENT_MS; an
+            # OSError is the client gone (CPython's TimeoutError is an OSError too)
+            gone = isinstance(e, OSError) and not isinstance(e, asyncio.TimeoutError)
+            if not (gone or conn and conn.sent):
                 try:
                     await writer.awrite(_FAILED)
                 except Exception:

@@ -606,6 +606,17 @@ class Stream(Tidy):
                 seen.append(w.sim.position(1))
         return seen, starts, idle
 
+    def test_a_joints_dps_holds_through_its_arrival(self):
+        # A joint of 60 degrees/s (25 positions in 100 ms) streamed to 90 (or -90): the
+        # step that reaches the target glides at the dps, and the next frame (the same
+        # target again) must not cut that glide short. Found by the mutation pass: 35
+        # positions in 100 ms at the end of the way.
+        for loop_ms, pace in ((10, 10), (10, 50)):
+            for target in (90, -90):
+                seen, _, _ = self.slowed(60, loop_ms, pace, [(2500, target)])
+                fastest = max(abs(seen[t + 100] - seen[t]) for t in range(len(seen) - 100))
+                self.assertTrue(fastest <= 25 + 2, (loop_ms, pace, target, fastest))
+
     def test_a_slowed_joint_turns_back_within_two_frames_when_its_target_does(self):
         # A slider dragged to 90 degrees (or -90), then back, a joint of 60 degrees/s
         # following it (a 100 Hz loop, a target every 20 ms): the servo turns back within
