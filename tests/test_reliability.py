@@ -247,24 +247,8 @@ class Wire(unittest.TestCase):
                 (3000, None),
                 (600, UnixTicks()),  # on ticks past 2**30, as the unix port's after 12.4 days
             ):
-                w = wire.World(port, clock=clock)
-                busservo.time = w.clock
-                bus = busservo.BusServo(w.uart)
-                w.late(late)
-                self.assertTrue(timed_out(bus.read_battery), port)
-                wrong = []
-                asked = 0
-                while w.clock.now_us < (late + 600) * 1000:
-                    asked += 1
-                    w.sim.battery = 7000 + asked
-                    try:
-                        got = bus.read_battery()
-                    except OSError:  # the late reply is waited for, or in the way
-                        continue
-                    if got != 7000 + asked:
-                        wrong.append((asked, got))
-                why = (port, late, wrong)
-                self.assertTrue(len(wrong) <= 1 and asked > 30, why)
+                wrong, asked = self.battery_after_a_late_reply(port, late, clock)
+                self.assertTrue(len(wrong) <= 1 and asked > 30, (port, late, wrong))
 
     def test_a_reply_seconds_late_on_ticks_past_2_to_the_30_makes_one_answer_wrong_at_most(self):
         # As above, on the unix port's ticks after 12.4 days up. When the requests given up
@@ -273,23 +257,30 @@ class Wire(unittest.TestCase):
         # and the replies on their way behind the late one answer the wrong queries.
         for port in wire.PORTS:
             for late in (1500, 3000):
-                w = wire.World(port, clock=UnixTicks())
-                busservo.time = w.clock
-                bus = busservo.BusServo(w.uart)
-                w.late(late)
-                self.assertTrue(timed_out(bus.read_battery), port)
-                wrong = []
-                asked = 0
-                while w.clock.now_us < (late + 600) * 1000:
-                    asked += 1
-                    w.sim.battery = 7000 + asked
-                    try:
-                        got = bus.read_battery()
-                    except OSError:
-                        continue
-                    if got != 7000 + asked:
-                        wrong.append((asked, got))
+                wrong, asked = self.battery_after_a_late_reply(port, late, UnixTicks())
                 self.assertTrue(len(wrong) <= 1 and asked > 30, (port, late, wrong))
+
+    def battery_after_a_late_reply(self, port, late, clock=None):
+        """The controller answers one read_battery() late ms late, then every one at once,
+        each with its own value, for late + 600 ms of queries back to back: ([(query,
+        the wrong answer it got)], queries asked)."""
+        w = wire.World(port, clock=clock)
+        busservo.time = w.clock
+        bus = busservo.BusServo(w.uart)
+        w.late(late)
+        self.assertTrue(timed_out(bus.read_battery), port)
+        wrong = []
+        asked = 0
+        while w.clock.now_us < (late + 600) * 1000:
+            asked += 1
+            w.sim.battery = 7000 + asked
+            try:
+                got = bus.read_battery()
+            except OSError:  # the late reply is waited for, or in the way
+                continue
+            if got != 7000 + asked:
+                wrong.append((asked, got))
+        return wrong, asked
 
     def test_a_position_reply_over_half_a_second_late_makes_one_answer_wrong_at_most(self):
         for port in wire.PORTS:
