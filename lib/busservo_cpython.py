@@ -5,8 +5,9 @@
 #   const(x)            x (MicroPython folds it in at compile time)
 #   time                the time module, with ticks_ms/us/cpu, ticks_add, ticks_diff,
 #                       sleep_ms and sleep_us as MicroPython has them
-#   asyncio             the asyncio package, with sleep_ms, wait_for_ms, and streams
-#                       that have awrite()/aclose() (start_server, open_connection)
+#   asyncio             the asyncio package, with sleep_ms, wait_for_ms, streams that
+#                       have awrite()/aclose() (start_server, open_connection), and on
+#                       CPython 3.9 a Lock that may be made before asyncio.run()
 #   json                the json module, whose dumps() writes text as it is, as
 #                       MicroPython's does (not as \u escapes)
 #   bytearray8(n)       a bytearray that keeps the low 8 bits of what it is given
@@ -15,6 +16,7 @@
 # Ticks wrap at 2**30, as on a 32-bit board: ticks_diff() and ticks_add() are MicroPython's.
 import asyncio as _asyncio
 import json as _json
+import sys as _sys
 import time as _time
 import types
 
@@ -185,3 +187,39 @@ asyncio.sleep_ms = async_sleep_ms
 asyncio.wait_for_ms = wait_for_ms
 asyncio.start_server = start_server
 asyncio.open_connection = open_connection
+
+
+_Lock = _asyncio.Lock
+
+
+class Lock:
+    """asyncio.Lock, made in the loop that first uses it. CPython 3.9's binds to the loop
+    current when it is made, and a driver made before asyncio.run() has none (3.10 and
+    later bind on first use, as this does)."""
+
+    def __init__(self):
+        self._lock = None
+
+    def _made(self):
+        if self._lock is None:
+            self._lock = _Lock()
+        return self._lock
+
+    def locked(self):
+        return self._lock is not None and self._lock.locked()
+
+    async def acquire(self):
+        return await self._made().acquire()
+
+    def release(self):
+        self._made().release()
+
+    async def __aenter__(self):
+        await self.acquire()
+
+    async def __aexit__(self, *exc):
+        self.release()
+
+
+if _sys.version_info < (3, 10):
+    asyncio.Lock = Lock

@@ -38,6 +38,7 @@ asyncio.sleep_ms = busservo_cpython.async_sleep_ms
 asyncio.wait_for_ms = busservo_cpython.wait_for_ms
 asyncio.start_server = busservo_cpython.start_server
 asyncio.open_connection = busservo_cpython.open_connection
+asyncio.Lock = busservo_cpython.asyncio.Lock  # on 3.9, one that binds to a loop on first use
 
 # MicroPython's deflate module, for what the tests read of the gzipped page.
 deflate = types.ModuleType("deflate")
