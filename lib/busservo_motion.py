@@ -456,9 +456,13 @@ class Robot:
         # pause it starts afresh), the part of a position a frame cannot take carried to the
         # next; the frame takes as long as its longest step needs at that dps (glide), and no
         # frame goes before the servo is there (above). So a joint never turns faster than
-        # its dps, however fast step() runs and however fast the targets come.
+        # its dps, however fast step() runs and however fast the targets come. A glide grows
+        # by the loop's lateness, up to 10 loop periods: a new target is heard within them,
+        # and the joint goes at 10/11 of its dps at the least.
         elapsed = time.ticks_diff(now, self._sent)
         cap = self._ms + since
+        if cap > 10 * since:
+            cap = 10 * since
         if cap < ms:
             cap = ms
         if elapsed > cap:

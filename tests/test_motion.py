@@ -662,6 +662,23 @@ class Stream(Tidy):
             slowest = min(seen[t + 500] - seen[t] for t in range(100, len(seen) - 500))
             self.assertTrue(slowest >= 0.9 * most, (dps, loop_ms, slowest))
 
+    def test_a_long_slow_way_keeps_its_glides_short_enough_to_hear_a_new_target(self):
+        # 10 degrees/s for 10 s, a 100 Hz loop, a target every 50 ms: each frame's glide
+        # grows by the loop's lateness, but no further than 10 loop periods (100 ms) and the
+        # whole position it rounds to (24 ms at this dps), so a slider turned back is heard
+        # within them. Found by the mutation pass: 220 ms.
+        w, bus = world()
+        robot = bm.Robot(bus, {"j1": bm.Joint(1, dps=10)})
+        robot.where()
+        for t in range(10000):
+            if t % 50 == 0:
+                robot.stream({"j1": 110})
+            if t % 10 == 0:
+                robot.step()
+            settle(w, bus, 1)
+        glides = [ms for ms, _ in moves(w)]
+        self.assertTrue(len(glides) > 50 and max(glides) <= 125, (len(glides), max(glides)))
+
     def test_a_slowed_joint_leaves_the_wire_free_between_its_frames(self):
         # 30 degrees/s, a target every 50 ms, step() every ms: a frame goes once the servo is
         # where the last one sent it, about one a glide, and the wire is idle most of the time,
