@@ -37,7 +37,7 @@ def folder(name):
 
 
 def up_to_repo(path):
-    """The repository's path relative to folder path: ../../work/main, say."""
+    """The repository's path relative to folder path: ../../home/you/busservo, say."""
     return "/".join([".."] * path.count("/")) + REPO
 
 
