@@ -485,9 +485,9 @@ class Robot:
                 else:
                     most = owed[i] = 0  # there: nothing owed
                 owed[i] -= most * 1000
-                most = (abs(position - at[i]) * 1000 + pps - 1) // pps  # ms at its dps
-                if most > glide:
-                    glide = most
+                need = (abs(position - at[i]) * 1000 + pps - 1) // pps  # ms at its dps
+                if need > glide:
+                    glide = need
             live[k][1] = position
         self.bus.move_many(live, glide)
         self._sent = now
