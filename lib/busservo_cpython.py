@@ -14,8 +14,10 @@
 #   awaitable(cls)      makes `await obj` run obj.run(), as MicroPython's does
 #
 # Ticks wrap at 2**30, as on a 32-bit board: ticks_diff() and ticks_add() are MicroPython's.
-import asyncio as _asyncio
-import json as _json
+# json, and asyncio with what goes with it (async_sleep_ms, wait_for_ms, Stream,
+# start_server, open_connection, Lock), are made on first use, by __getattr__ below:
+# importing CPython's asyncio and json takes longer than the rest of a `busservo positions`
+# command, which needs neither.
 import sys as _sys
 import time as _time
 import types
@@ -101,125 +103,148 @@ time.sleep_ms = sleep_ms
 time.sleep_us = sleep_us
 
 
+# Made when first asked for: `from busservo_cpython import asyncio` (or json) asks
+# __getattr__ once, and the names are then the module's own.
+def __getattr__(name):
+    if name == "json":
+        made = {"json": _make_json()}
+    elif name in _ASYNCIO_NAMES:
+        made = _make_asyncio()
+    else:
+        raise AttributeError("module 'busservo_cpython' has no attribute %r" % name)
+    globals().update(made)
+    return made[name]
+
+
 # json, whose dumps() writes "é" as MicroPython's does, not "\u00e9".
-json = _copy(_json, "json")
-json.dumps = lambda obj: _json.dumps(obj, ensure_ascii=False)
+def _make_json():
+    import json as _json
+
+    json = _copy(_json, "json")
+    json.dumps = lambda obj: _json.dumps(obj, ensure_ascii=False)
+    return json
 
 
 # asyncio, with MicroPython's additions.
-asyncio = _copy(_asyncio, "asyncio")
+_ASYNCIO_NAMES = (
+    "asyncio",
+    "async_sleep_ms",
+    "wait_for_ms",
+    "Stream",
+    "start_server",
+    "open_connection",
+    "Lock",
+)
 
 
-async def async_sleep_ms(ms):
-    await _asyncio.sleep(max(ms, 0) / 1000)
+def _make_asyncio():
+    import asyncio as _asyncio
 
+    asyncio = _copy(_asyncio, "asyncio")
 
-async def wait_for_ms(aw, ms):
-    return await _asyncio.wait_for(aw, ms / 1000)
+    async def async_sleep_ms(ms):
+        await _asyncio.sleep(max(ms, 0) / 1000)
 
+    async def wait_for_ms(aw, ms):
+        return await _asyncio.wait_for(aw, ms / 1000)
 
-class Stream:
-    """A connection's reader and writer in one, as MicroPython's asyncio gives it (to
-    both arguments of a start_server() callback): read, readline, readexactly, write
-    then drain, awrite, close then wait_closed, aclose."""
+    class Stream:
+        """A connection's reader and writer in one, as MicroPython's asyncio gives it (to
+        both arguments of a start_server() callback): read, readline, readexactly, write
+        then drain, awrite, close then wait_closed, aclose."""
 
-    def __init__(self, reader, writer):
-        self._reader = reader
-        self._writer = writer
+        def __init__(self, reader, writer):
+            self._reader = reader
+            self._writer = writer
 
-    def get_extra_info(self, name, default=None):
-        return self._writer.get_extra_info(name, default)
+        def get_extra_info(self, name, default=None):
+            return self._writer.get_extra_info(name, default)
 
-    async def read(self, n=-1):
-        return await self._reader.read(n)
+        async def read(self, n=-1):
+            return await self._reader.read(n)
 
-    async def readline(self):
-        return await self._reader.readline()
+        async def readline(self):
+            return await self._reader.readline()
 
-    async def readexactly(self, n):
-        return await self._reader.readexactly(n)
+        async def readexactly(self, n):
+            return await self._reader.readexactly(n)
 
-    def write(self, data):
-        self._writer.write(data)
+        def write(self, data):
+            self._writer.write(data)
 
-    async def drain(self):
-        await self._writer.drain()
+        async def drain(self):
+            await self._writer.drain()
 
-    async def awrite(self, data, off=0, sz=-1):
-        if off or sz != -1:
-            data = memoryview(data)[off : None if sz == -1 else off + sz]
-        self._writer.write(data)
-        await self._writer.drain()
+        async def awrite(self, data, off=0, sz=-1):
+            if off or sz != -1:
+                data = memoryview(data)[off : None if sz == -1 else off + sz]
+            self._writer.write(data)
+            await self._writer.drain()
 
-    def close(self):
-        self._writer.close()
+        def close(self):
+            self._writer.close()
 
-    async def wait_closed(self):
-        try:
-            await self._writer.wait_closed()
-        except (OSError, _asyncio.CancelledError):
-            pass  # the peer reset it: closed all the same
+        async def wait_closed(self):
+            try:
+                await self._writer.wait_closed()
+            except (OSError, _asyncio.CancelledError):
+                pass  # the peer reset it: closed all the same
 
-    async def aclose(self):
-        self.close()
-        await self.wait_closed()
+        async def aclose(self):
+            self.close()
+            await self.wait_closed()
 
+    _start_server = _asyncio.start_server
+    _open_connection = _asyncio.open_connection
 
-_start_server = _asyncio.start_server
-_open_connection = _asyncio.open_connection
+    async def start_server(callback, host, port, backlog=5, ssl=None):
+        def each(reader, writer):
+            stream = Stream(reader, writer)
+            return callback(stream, stream)
 
+        return await _start_server(each, host, port, backlog=backlog, ssl=ssl)
 
-async def start_server(callback, host, port, backlog=5, ssl=None):
-    def each(reader, writer):
+    async def open_connection(host, port, ssl=None):
+        reader, writer = await _open_connection(host, port, ssl=ssl)
         stream = Stream(reader, writer)
-        return callback(stream, stream)
+        return stream, stream
 
-    return await _start_server(each, host, port, backlog=backlog, ssl=ssl)
+    asyncio.sleep_ms = async_sleep_ms
+    asyncio.wait_for_ms = wait_for_ms
+    asyncio.start_server = start_server
+    asyncio.open_connection = open_connection
 
+    _Lock = _asyncio.Lock
 
-async def open_connection(host, port, ssl=None):
-    reader, writer = await _open_connection(host, port, ssl=ssl)
-    stream = Stream(reader, writer)
-    return stream, stream
+    class Lock:
+        """asyncio.Lock, made in the loop that first uses it. CPython 3.9's binds to the loop
+        current when it is made, and a driver made before asyncio.run() has none (3.10 and
+        later bind on first use, as this does)."""
 
+        def __init__(self):
+            self._lock = None
 
-asyncio.sleep_ms = async_sleep_ms
-asyncio.wait_for_ms = wait_for_ms
-asyncio.start_server = start_server
-asyncio.open_connection = open_connection
+        def _made(self):
+            if self._lock is None:
+                self._lock = _Lock()
+            return self._lock
 
+        def locked(self):
+            return self._lock is not None and self._lock.locked()
 
-_Lock = _asyncio.Lock
+        async def acquire(self):
+            return await self._made().acquire()
 
+        def release(self):
+            self._made().release()
 
-class Lock:
-    """asyncio.Lock, made in the loop that first uses it. CPython 3.9's binds to the loop
-    current when it is made, and a driver made before asyncio.run() has none (3.10 and
-    later bind on first use, as this does)."""
+        async def __aenter__(self):
+            await self.acquire()
 
-    def __init__(self):
-        self._lock = None
+        async def __aexit__(self, *exc):
+            self.release()
 
-    def _made(self):
-        if self._lock is None:
-            self._lock = _Lock()
-        return self._lock
-
-    def locked(self):
-        return self._lock is not None and self._lock.locked()
-
-    async def acquire(self):
-        return await self._made().acquire()
-
-    def release(self):
-        self._made().release()
-
-    async def __aenter__(self):
-        await self.acquire()
-
-    async def __aexit__(self, *exc):
-        self.release()
-
-
-if _sys.version_info < (3, 10):
-    asyncio.Lock = Lock
+    if _sys.version_info < (3, 10):
+        asyncio.Lock = Lock
+    made = dict(locals())
+    return {name: made[name] for name in _ASYNCIO_NAMES}
