@@ -838,8 +838,8 @@ def _arm_part():
     return busservo_web_arm
 
 
-async def serve(robot, password, port=80, arm=None, path=_CALIBRATION):
-    """Serve the panel for robot on port, on every interface, until cancelled.
+async def serve(robot, password, port=80, arm=None, path=_CALIBRATION, host="0.0.0.0"):
+    """Serve the panel for robot on port, on every interface (or host's), until cancelled.
     password: a str of 8 or more characters, which the page asks for. arm: a
     busservo_arm.Arm on robot to jog (default: the one path's links make, if it has them);
     path: the calibration file, which the calibration page writes."""
@@ -852,9 +852,7 @@ async def serve(robot, password, port=80, arm=None, path=_CALIBRATION):
     server = None
     try:
         # Each connection through the attribute, so that a test may wrap it.
-        server = await asyncio.start_server(
-            lambda r, w: panel.handle_request(r, w), "0.0.0.0", port
-        )
+        server = await asyncio.start_server(lambda r, w: panel.handle_request(r, w), host, port)
         await server.wait_closed()
     finally:
         loop.cancel()

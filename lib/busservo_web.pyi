@@ -37,13 +37,18 @@ from busservo_calibrate import Calibration
 from busservo_motion import Player, Robot, Sequence
 
 async def serve(
-    robot: Robot, password: str, port: int = 80, arm: Arm | None = None, path: str = "robot.json"
+    robot: Robot,
+    password: str,
+    port: int = 80,
+    arm: Arm | None = None,
+    path: str = "robot.json",
+    host: str = "0.0.0.0",
 ) -> None:
-    """Serve the panel for robot on port, on every interface, until cancelled. password: a
-    str of 8 or more characters, which the page asks for (ValueError otherwise). arm: an Arm
-    on robot for the page to jog (None: the one path's links make, if it has any). path: the
-    calibration file (busservo_board.CALIBRATION by default), which the calibration page
-    saves."""
+    """Serve the panel for robot on port, on every interface (or host's: "127.0.0.1" for
+    this machine alone), until cancelled. password: a str of 8 or more characters, which
+    the page asks for (ValueError otherwise). arm: an Arm on robot for the page to jog (None:
+    the one path's links make, if it has any). path: the calibration file
+    (busservo_board.CALIBRATION by default), which the calibration page saves."""
 
 class Panel:
     """The panel's state, its loop and its HTTP side; serve() makes one."""
