@@ -11,16 +11,16 @@
 # MicroPython's ports have them: any(), readinto() and write() never wait (write() takes
 # what the OS has room for, and says how much). What goes wrong is an OSError that says it
 # in words: no such port (ENOENT), in use by another program (EBUSY), no permission
-# (EACCES), gone, unplugged mid-command (ENODEV).
+# (EACCES), a file or a folder, not a serial port (ENOTTY), gone, unplugged mid-command
+# (ENODEV).
+#
+# The `busservo` command (main(), below) is this module too: `busservo --help` says it.
 import errno
 import os
 import sys
 import time
 
 BAUDRATE = 9600
-# The command's queries wait this long for an answer: USB adds its latency to the wire's
-# (an adapter's own timer, 16 ms on an FTDI; a busy computer), and a command is no control loop.
-_TIMEOUT_MS = 500
 
 
 def _serial():
@@ -42,7 +42,15 @@ def _why(e):
         return errno.ENOENT
     if "access is denied" in text or "permission" in text:
         return errno.EBUSY if sys.platform == "win32" else errno.EACCES
+    if "inappropriate ioctl" in text:  # pyserial's "Could not configure port": no tty
+        return errno.ENOTTY
     return errno.EIO
+
+
+def _not_a_port(path, what="a serial port"):
+    return OSError(
+        errno.ENOTTY, "%s is not %s (busservo ports lists those there are)" % (path, what)
+    )
 
 
 def _open_error(path, e):
@@ -53,6 +61,8 @@ def _open_error(path, e):
         return OSError(
             errno.EBUSY, "%s is busy: another program has it open (close it first)" % path
         )
+    if code in (errno.ENOTTY, errno.EISDIR):
+        return _not_a_port(path)
     if code == errno.EACCES:
         return OSError(
             code,
@@ -141,6 +151,10 @@ def serial_port(path, baudrate=BAUDRATE):
     """The serial port at path (/dev/ttyUSB0, COM3, ...), open at baudrate 8N1, for
     busservo.BusServo(). Raises OSError saying why it cannot be opened."""
     serial = _serial()
+    if os.path.isdir(path):
+        raise _not_a_port(path, "a serial port but a folder")
+    if os.path.isfile(path):
+        raise _not_a_port(path, "a serial port but a file")
     try:
         port = serial.Serial(
             path,
@@ -169,6 +183,7 @@ _CHIPS = {
 def ports():
     """The serial ports there are, [(port, description)], the USB ones first: the
     controller is one of them (unplug it and look again to see which)."""
+    _serial()  # says pyserial is not installed, if it is not
     from serial.tools import list_ports
 
     found = []
@@ -182,35 +197,116 @@ def ports():
     return [(device, what) for _, device, what in sorted(found)]
 
 
-# The command line: busservo ports | check PORT | positions PORT ID... | move PORT ID POS MS |
-# panel PORT --password P [--port N]. PORT --sim is the simulated controller.
+# The command line: `busservo COMMAND PORT ...`, as _USAGE says. PORT --sim is the simulated
+# controller; hid and hid:PATH a USB HID controller (busservo_hid, pip install ".[hid]").
 
 _CHECKED = "--i-have-checked-my-robot"
 _USAGE = """usage: busservo COMMAND ...
-  busservo ports                       the serial ports, the USB ones first
+  busservo ports                       the controller's ports: serial (the USB ones first), HID
   busservo check PORT                  the wiring check: the battery and the round trip
-  busservo positions PORT ID [ID...]   the positions of servos ID...
-  busservo move PORT ID POS MS [%s]
-                                       move servo ID to POS (0..1000) over MS ms
-  busservo panel PORT --password P [--port N] [%s]
-                                       the browser panel, at http://127.0.0.1:N/ (8080)
-PORT is /dev/ttyUSB0, COM3, ... or --sim for the simulated controller (nothing real moves).
-Anything that moves asks for %s: check first that the servos can turn freely,
-with nothing in their way.""" % (_CHECKED, _CHECKED, _CHECKED)
+  busservo scan PORT                   the servos that answer (ids 0..253), and where they are
+  busservo positions PORT ID [ID...]   the positions of servos ID... (84 at most)
+  busservo move PORT ID POS MS [%(checked)s]
+                                       move servo ID to POS (0..1000) over MS ms; Ctrl-C
+                                       stops it where it is
+  busservo limp PORT ID [ID...]        servos ID... go limp (unload), to be turned by hand:
+                                       what they hold up falls; each holds again when moved
+  busservo group PORT N [TIMES] [%(checked)s]
+                                       run the controller's action group N (0..255) TIMES
+                                       times (1; 0: until stopped); Ctrl-C stops it
+  busservo stop PORT                   stop the action group that runs
+  busservo panel PORT --password P [--port N] [--host H] [%(checked)s]
+                                       the browser panel, at http://127.0.0.1:N/ (8080), on
+                                       every interface or H's (--host 127.0.0.1: this one)
+  busservo --version                   busservo's version
+PORT is /dev/ttyUSB0, COM3, ... (a serial port), hid or hid:PATH (a USB HID controller: the
+first found, or that one), or --sim: a simulated controller, servos 1..6 (nothing real moves).
+--json: ports, check, scan, positions and move print JSON (and their words to stderr).
+--timeout MS: how long each query waits for its answer (500 ms, and 10 ms more an id).
+Anything that moves asks for %(checked)s: check first that the servos can turn
+freely, with nothing in their way.""" % {"checked": _CHECKED}
+
+# What each command takes besides its words (--i-have-checked-my-robot: all of them).
+_TAKES = {
+    "ports": ("--json",),
+    "check": ("--json", "--timeout"),
+    "scan": ("--json", "--timeout"),
+    "positions": ("--json", "--timeout"),
+    "move": ("--json", "--timeout"),
+    "limp": ("--timeout",),
+    "group": ("--timeout",),
+    "stop": ("--timeout",),
+    "panel": ("--password", "--port", "--host", "--timeout"),
+}
+_VALUED = {"--password": "P", "--port": "N", "--host": "H", "--timeout": "MS"}
+_FLAGS = ("--json", _CHECKED, "-h", "--help", "-V", "--version")
+# The command's queries wait this long for an answer (and _PER_ID_MS more a servo asked, for
+# the wire's 4 more bytes and the servo the controller asks): USB adds its latency to the
+# wire's (an adapter's own timer, 16 ms on an FTDI; a busy computer), and a command is no
+# control loop.
+_TIMEOUT_MS = 500
+_PER_ID_MS = 10
+_IDS_MAX = 84  # positions one query may ask for: the reply must fit in a Length byte
+_UNLOAD_MAX = 252  # servos one unload may name
+_HALT_MS = 100  # a move stopped by Ctrl-C: the servo goes where it is in this, as the panel's
+# The panel's joints on a real controller turn no faster (degrees a second): a slider dragged
+# fast would whip the arm.
+_PANEL_DPS = 30
+_ANY_HOST = "0.0.0.0"
+_SIM_SERVOS = range(1, 7)  # the servos on --sim's bus
 
 
 class _Usage(Exception):
     pass
 
 
-def _bus(port):
-    import busservo
+class _BadFile(Exception):
+    pass
 
-    if port == "--sim":
-        import busservo_sim
 
-        return busservo.BusServo(busservo_sim.SimController()), True
-    return busservo.BusServo(serial_port(port)), False
+class _Run:
+    """One command's PORT and options, and where it writes: words for people on stdout, or
+    with --json the JSON on stdout and the words on stderr."""
+
+    def __init__(self, options):
+        self.json = "--json" in options
+        self.timeout = None
+        if "--timeout" in options:
+            self.timeout = _int(options["--timeout"], "--timeout", 1, 60000)
+        self.port = None
+        self.waited = _TIMEOUT_MS  # the last query's timeout, for the words when it ran out
+
+    def ms(self, ids=0):
+        """A query's timeout, for the positions of ids servos (0: the battery)."""
+        self.waited = self.timeout or _TIMEOUT_MS + _PER_ID_MS * ids
+        return self.waited
+
+    def say(self, *words):
+        print(*words, file=sys.stderr if self.json else sys.stdout, flush=True)
+
+    def result(self, value):
+        if self.json:
+            import json
+
+            print(json.dumps(value))
+
+
+def _parse(args):
+    # The words (the command, PORT, numbers) and the options {name: value or True}.
+    words, options = [], {}
+    while args:
+        arg = args.pop(0)
+        if arg in _VALUED:
+            if not args:
+                raise _Usage("%s wants a value: %s %s" % (arg, arg, _VALUED[arg]))
+            options[arg] = args.pop(0)
+        elif arg in _FLAGS:
+            options[arg] = True
+        elif arg[:1] == "-" and arg != "--sim" and not arg[1:].isdigit():
+            raise _Usage("no option %r" % arg)
+        else:
+            words.append(arg)
+    return words, options
 
 
 def _int(text, what, low, high):
@@ -223,166 +319,412 @@ def _int(text, what, low, high):
     return value
 
 
-def _check(port):
-    bus, _ = _bus(port)
+def _ids(words, what, high):
+    ids = [_int(i, "an id", 0, 254) for i in words]
+    if not 1 <= len(ids) <= high:
+        raise _Usage("%s wants 1..%d ids, got %d" % (what, high, len(ids)))
+    return ids
+
+
+def _hid():
+    # busservo_hid (the USB HID controllers), or None where it is not installed.
+    try:
+        import busservo_hid
+    except ImportError as e:
+        if e.name != "busservo_hid":
+            raise
+        return None
+    return busservo_hid
+
+
+def _open(port):
+    """The UART for PORT: hid or hid:PATH a USB HID controller, else a serial port."""
+    if port == "hid" or port.startswith("hid:"):
+        hid = _hid()
+        if hid is None:
+            raise OSError(errno.ENOENT, "no busservo_hid module for %s: pip install ." % port)
+        return hid.hid_port(port)
+    return serial_port(port)
+
+
+def _bus(run):
+    import busservo
+
+    if run.port == "--sim":
+        import busservo_sim
+
+        sim = busservo_sim.SimController()
+        sim.missing.update(i for i in range(256) if i not in _SIM_SERVOS)  # as a 6-servo arm
+        return busservo.BusServo(sim), True
+    return busservo.BusServo(_open(run.port)), False
+
+
+def _checklist(run, out):
+    print(
+        "no answer from the controller on %s within %d ms. Check:" % (run.port, run.waited),
+        file=out,
+    )
+    print("1. the controller is powered: battery charged, switch on, its LED lit", file=out)
+    print("2. PORT is the controller's (busservo ports; unplug it and look again)", file=out)
+    print("3. its USB cable carries data (some carry power only)", file=out)
+
+
+def _answers(bus, run):
+    # Ask the controller for its battery before a command it never answers: silence is the
+    # checklist (raised), not "done". What came before the answer (a group's STOP meant for
+    # the program before) is passed over.
+    bus.read_battery(run.ms())
+    while bus.poll() is not None:
+        pass
+
+
+def _where(bus, run, servo_id):
+    # Where servo_id is, or None if it does not answer.
+    return bus.read_positions([servo_id], run.ms(1))[servo_id]
+
+
+def _ports(run, words, options):
+    if words:
+        raise _Usage("ports takes nothing more")
+    hid = _hid()
+    found = (hid.ports() if hid else []) + ports()
+    run.result([{"port": port, "description": what} for port, what in found])
+    for port, what in found:
+        run.say("%s  %s" % (port, what))
+    if not found:
+        run.say(
+            "no serial ports and no HID controllers: plug the controller's USB cable in "
+            "(a data cable)"
+        )
+    return 0
+
+
+def _check(run, words, options):
+    if words:
+        raise _Usage("check takes PORT only")
+    bus, _ = _bus(run)
     start = time.monotonic()
     try:
-        mv = bus.read_battery(_TIMEOUT_MS)
+        mv = bus.read_battery(run.ms())
     except OSError as e:
         if e.errno != errno.ETIMEDOUT:
             raise
-        print("no answer from the controller on %s within %d ms. Check:" % (port, _TIMEOUT_MS))
-        print("1. the controller is powered: battery charged, switch on, its LED lit")
-        print("2. PORT is the controller's (busservo ports; unplug it and look again)")
-        print("3. its USB cable carries data (some carry power only)")
+        _checklist(run, sys.stderr if run.json else sys.stdout)
         return 1
-    took = time.monotonic() - start
-    print("battery: %.2f V" % (mv / 1000))
-    print(
-        "round trip: %.1f ms (about 10.4 ms on the wire at 9600 baud, plus USB's)" % (took * 1000)
-    )
+    took = (time.monotonic() - start) * 1000
+    run.result({"battery_mv": mv, "round_trip_ms": round(took, 1), "noise": bus.noise})
+    run.say("battery: %.2f V" % (mv / 1000))
+    run.say("round trip: %.1f ms (about 10.4 ms on the wire at 9600 baud, plus USB's)" % took)
     if bus.noise:
-        print("%d bytes came that made no frame: the baud rate, or another program" % bus.noise)
+        run.say("%d bytes came that made no frame: the baud rate, or another program" % bus.noise)
         return 1
     return 0
 
 
-def _positions(port, ids):
-    ids = [_int(i, "an id", 0, 254) for i in ids]
-    if not ids:
-        raise _Usage("positions wants one id or more")
-    bus, _ = _bus(port)
-    read = bus.read_positions(ids, _TIMEOUT_MS)
+def _positions(run, words, options):
+    ids = _ids(words, "positions", _IDS_MAX)
+    bus, _ = _bus(run)
+    read = bus.read_positions(ids, run.ms(len(ids)))
+    run.result({str(i): read[i] for i in ids})
     for i in ids:
-        print("%d: %s" % (i, "no answer" if read[i] is None else read[i]))
+        run.say("%d: %s" % (i, "no answer" if read[i] is None else read[i]))
     return 1 if None in read.values() else 0
 
 
-def _move(port, args):
-    checked = _CHECKED in args
-    args = [a for a in args if a != _CHECKED]
-    if len(args) != 3:
-        raise _Usage("move wants ID POS MS")
-    servo_id = _int(args[0], "ID", 0, 254)
-    position = _int(args[1], "POS", 0, 1000)
-    ms = _int(args[2], "MS", 0, 30000)
-    bus, simulated = _bus(port)
-    now = bus.read_positions([servo_id], _TIMEOUT_MS)[servo_id]
-    if now is None:
-        print("servo %d does not answer: its power, the bus cable, its id" % servo_id)
+def _scan(run, words, options):
+    if words:
+        raise _Usage("scan takes PORT only")
+    bus, _ = _bus(run)
+    found = {}
+    for first in range(0, 254, _IDS_MAX):
+        ids = list(range(first, min(first + _IDS_MAX, 254)))
+        read = bus.read_positions(ids, run.ms(len(ids)))
+        found.update((i, read[i]) for i in ids if read[i] is not None)
+    run.result({str(i): found[i] for i in found})
+    for i in found:
+        run.say("%d: %s" % (i, found[i]))
+    if not found:
+        run.say(
+            "no servo answers: their power (the controller's supply, not USB), the bus "
+            "cables, each servo's id"
+        )
         return 1
-    print("servo %d is at %d; this moves it to %d over %d ms" % (servo_id, now, position, ms))
-    if not (checked or simulated):
-        print(
+    return 0
+
+
+def _move(run, words, options):
+    if len(words) != 3:
+        raise _Usage("move wants ID POS MS")
+    servo_id = _int(words[0], "ID", 0, 254)
+    position = _int(words[1], "POS", 0, 1000)
+    ms = _int(words[2], "MS", 0, 30000)
+    bus, simulated = _bus(run)
+    now = _where(bus, run, servo_id)
+    if now is None:
+        run.say("servo %d does not answer: its power, the bus cable, its id" % servo_id)
+        return 1
+    run.say("servo %d is at %d; this moves it to %d over %d ms" % (servo_id, now, position, ms))
+    if not (_CHECKED in options or simulated):
+        run.say(
             "nothing moved: check that servo %d can turn freely, then add %s"
             % (servo_id, _CHECKED)
         )
         return 1
     bus.move(servo_id, position, ms)
-    time.sleep(ms / 1000 + 0.05)
-    print("servo %d is at %d" % (servo_id, bus.read_positions([servo_id], _TIMEOUT_MS)[servo_id]))
+    try:
+        time.sleep(ms / 1000 + 0.05)
+    except KeyboardInterrupt:
+        # Ctrl-C: stop it where it is (as the panel's STOP does), not where it was going.
+        at = _where(bus, run, servo_id)
+        if at is None:
+            run.say("servo %d did not answer: it goes on to %d" % (servo_id, position))
+        else:
+            bus.move(servo_id, at, _HALT_MS)
+            run.say("stopped: servo %d holds at %d" % (servo_id, at))
+        return 130
+    at = _where(bus, run, servo_id)
+    run.result({"servo": servo_id, "from": now, "to": position, "at": at})
+    if at is None:
+        run.say("servo %d does not answer now: its power, the bus cable" % servo_id)
+        return 1
+    run.say("servo %d is at %d" % (servo_id, at))
     return 0
 
 
-def _panel(port, args):
-    import asyncio
+def _limp(run, words, options):
+    ids = _ids(words, "limp", _UNLOAD_MAX)
+    bus, _ = _bus(run)
+    _answers(bus, run)
+    bus.unload(ids)
+    run.say(
+        "servos %s are limp: turn them by hand; each holds again when moved"
+        % ", ".join(str(i) for i in ids)
+    )
+    return 0
 
+
+def _wait_for_group(bus, group, until):
+    # The command byte of the controller's next RUN, STOP or COMPLETE frame (of group for
+    # RUN and COMPLETE), or None once time.monotonic() passes until.
+    import busservo
+
+    while until is None or time.monotonic() < until:
+        cmd = bus.poll()
+        if cmd == busservo.CMD_ACTION_GROUP_STOP or (
+            cmd in (busservo.CMD_ACTION_GROUP_RUN, busservo.CMD_ACTION_GROUP_COMPLETE)
+            and bus.group == group
+        ):
+            return cmd
+        if cmd is None:
+            time.sleep(0.005)
+    return None
+
+
+def _group(run, words, options):
+    import busservo
+
+    if not 1 <= len(words) <= 2:
+        raise _Usage("group wants N [TIMES]")
+    group = _int(words[0], "N", 0, 255)
+    times = _int(words[1], "TIMES", 0, 65535) if len(words) > 1 else 1
+    bus, simulated = _bus(run)
+    _answers(bus, run)
+    if not (_CHECKED in options or simulated):
+        print(
+            "nothing moved: action group %d moves the servos it holds; check that they can" % group
+        )
+        print("turn freely, then add " + _CHECKED)
+        return 1
+    bus.run_group(group, times)
+    try:
+        cmd = _wait_for_group(bus, group, time.monotonic() + run.ms() / 1000)
+        if cmd != busservo.CMD_ACTION_GROUP_RUN:
+            print(
+                "action group %d did not start: has the controller one of that number? "
+                "(its PC software stores them)" % group
+            )
+            return 1
+        print(
+            "action group %d runs %s (Ctrl-C stops it)"
+            % (group, "until stopped" if not times else "%d times" % times),
+            flush=True,
+        )
+        cmd = _wait_for_group(bus, group, None)
+    except KeyboardInterrupt:
+        bus.stop_group()
+        print("stopped action group %d" % group)
+        return 130
+    if cmd == busservo.CMD_ACTION_GROUP_STOP:
+        print("action group %d was stopped" % group)
+        return 1
+    print("action group %d done" % group)
+    return 0
+
+
+def _stop(run, words, options):
+    import busservo
+
+    if words:
+        raise _Usage("stop takes PORT only")
+    bus, _ = _bus(run)
+    _answers(bus, run)
+    bus.stop_group()
+    # The controller says STOP back when a group was running.
+    until = time.monotonic() + run.ms() / 1000
+    while time.monotonic() < until:
+        if bus.poll() == busservo.CMD_ACTION_GROUP_STOP:
+            print("stopped the action group that ran")
+            return 0
+        time.sleep(0.005)
+    print("no action group was running")
+    return 0
+
+
+def _robot(bus, dps):
+    # The panel's robot: the calibration in robot.json, or examples/web_panel.py's joints.
     import busservo_board
     import busservo_motion as bm
-    import busservo_web
 
-    checked = _CHECKED in args
-    args = [a for a in args if a != _CHECKED]
-    options = {"--password": None, "--port": "8080"}
-    while args:
-        name = args.pop(0)
-        if name not in options or not args:
-            raise _Usage("panel takes --password P and --port N, got %r" % name)
-        options[name] = args.pop(0)
-    key = options["--password"]
+    try:
+        return busservo_board.robot(
+            bus,
+            {
+                "base": bm.Joint(1, dps=dps),
+                "shoulder": bm.Joint(2, limits=(-90, 90), dps=dps),
+                "elbow": bm.Joint(3, limits=(-90, 90), dps=dps),
+                "claw": bm.Joint(4, limits=(0, 60), dps=dps),
+            },
+        )
+    except (ValueError, TypeError) as e:  # the file's words: they name it
+        raise _BadFile(
+            "%s (the calibration in the folder you run from: mend it, or move it away)" % e
+        )
+
+
+def _panel(run, words, options):
+    if words:
+        raise _Usage("panel takes --password P, --port N and --host H, got %r" % words[0])
+    key = options.get("--password")
     if not key or len(key) < 8:
         raise _Usage("panel wants --password P, of 8 characters or more")
-    tcp = _int(options["--port"], "--port", 1, 65535)
+    tcp = _int(options.get("--port", "8080"), "--port", 1, 65535)
+    host = options.get("--host", _ANY_HOST)
+    if not host:
+        raise _Usage("--host wants an address of this computer's, or 0.0.0.0 for every one")
+    import busservo_web
+
     # The page beside busservo_web, in the computer's own way of writing paths.
     busservo_web._PAGE = os.path.join(
         os.path.dirname(os.path.abspath(busservo_web.__file__)), "busservo_web.html.gz"
     )
-    bus, simulated = _bus(port)
-    dps = None if simulated else 30
-    robot = busservo_board.robot(
-        bus,
-        {
-            "base": bm.Joint(1, dps=dps),
-            "shoulder": bm.Joint(2, limits=(-90, 90), dps=dps),
-            "elbow": bm.Joint(3, limits=(-90, 90), dps=dps),
-            "claw": bm.Joint(4, limits=(0, 60), dps=dps),
-        },
-    )
+    bus, simulated = _bus(run)
+    robot = _robot(bus, None if simulated else _PANEL_DPS)
     ids = [robot.joints[name].servo_id for name in robot.names]
-    print("the servos are at", bus.read_positions(ids, _TIMEOUT_MS))
-    if not (checked or simulated):
+    print("the servos are at", bus.read_positions(ids, run.ms(len(ids))))
+    if not (_CHECKED in options or simulated):
         print("nothing moved: the panel moves servos %s; check that they can turn freely," % ids)
         print("then add " + _CHECKED)
         return 1
     robot.where()
+    return _serve(robot, key, tcp, host)
+
+
+def _serve(robot, key, tcp, host):
+    import socket
+
+    import busservo_web
+    from busservo_cpython import asyncio
 
     async def serve():
-        task = asyncio.ensure_future(busservo_web.serve(robot, key, tcp))
+        task = asyncio.ensure_future(busservo_web.serve(robot, key, tcp, host=host))
         await asyncio.sleep(0.2)
         if not task.done():
-            print("open http://127.0.0.1:%d/ and log in with the password %r" % (tcp, key))
+            shown = "127.0.0.1" if host in (_ANY_HOST, "::") else host
+            print("open http://%s:%d/ and log in with the password %r" % (shown, tcp, key))
             print("(Ctrl-C stops the panel)", flush=True)
         await task
 
     try:
         asyncio.run(serve())
+    except socket.gaierror as e:
+        print("busservo: no address %r on this computer: %s" % (host, e.strerror), file=sys.stderr)
+        return 1
     except OSError as e:
-        if e.errno not in (errno.EADDRINUSE, getattr(errno, "WSAEADDRINUSE", 0)):
+        if e.errno in (errno.EADDRINUSE, getattr(errno, "WSAEADDRINUSE", 0)):
+            print("port %d is in use (another panel?): give another with --port N" % tcp)
+        elif e.errno == errno.EADDRNOTAVAIL:
+            print("%s is no address of this computer's: give one with --host H" % host)
+        elif e.errno == errno.EACCES and tcp < 1024:
+            print("port %d needs the administrator: give one above 1023 with --port N" % tcp)
+        else:
             raise
-        print("port %d is in use (another panel?): give another with --port N" % tcp)
         return 1
     finally:
         robot.hold()
     return 0
 
 
+_COMMANDS = {
+    "ports": _ports,
+    "check": _check,
+    "scan": _scan,
+    "positions": _positions,
+    "move": _move,
+    "limp": _limp,
+    "group": _group,
+    "stop": _stop,
+    "panel": _panel,
+}
+
+
 def main(argv=None):
-    """The `busservo` command: returns its exit status (0 done, 1 failed, 2 bad usage)."""
+    """The `busservo` command: returns its exit status (0 done, 1 failed, 2 bad usage,
+    130 stopped by Ctrl-C)."""
     args = list(sys.argv[1:] if argv is None else argv)
+    run = None
     try:
-        if not args or args[0] in ("-h", "--help", "help"):
+        words, options = _parse(list(args))
+        if not args or "-h" in options or "--help" in options or words[:1] == ["help"]:
             print(_USAGE)
             return 0 if args else 2
-        command = args.pop(0)
-        if command == "ports":
-            found = ports()
-            for device, what in found:
-                print("%s  %s" % (device, what))
-            if not found:
-                print("no serial ports: plug the controller's USB cable in (a data cable)")
+        if "-V" in options or "--version" in options:
+            import busservo
+
+            print("busservo", busservo.__version__)
             return 0
-        if command not in ("check", "positions", "move", "panel"):
+        if not words:
+            raise _Usage("no command: busservo ports, check, scan, positions, move, ...")
+        command = words.pop(0)
+        if command not in _COMMANDS:
             raise _Usage("no command %r" % command)
-        if not args:
-            raise _Usage("%s wants a PORT (busservo ports lists them; --sim: simulated)" % command)
-        port = args.pop(0)
-        if command == "check":
-            if args:
-                raise _Usage("check takes PORT only")
-            return _check(port)
-        if command == "positions":
-            return _positions(port, args)
-        if command == "move":
-            return _move(port, args)
-        return _panel(port, args)
+        for name in options:
+            if name not in _TAKES[command] and name != _CHECKED:
+                raise _Usage("%s takes no %s" % (command, name))
+        run = _Run(options)
+        if command != "ports":
+            if not words:
+                raise _Usage(
+                    "%s wants a PORT (busservo ports lists them; --sim: simulated)" % command
+                )
+            run.port = words.pop(0)
+        return _COMMANDS[command](run, words, options)
     except _Usage as e:
         print("busservo: %s (busservo --help)" % e, file=sys.stderr)
         return 2
+    except _BadFile as e:
+        print("busservo: %s" % e, file=sys.stderr)
+        return 2
     except OSError as e:
-        if e.errno == errno.ETIMEDOUT:
-            why = "the controller did not answer in time"
+        if e.errno == errno.ETIMEDOUT and run and run.port:
+            print("busservo: ", end="", file=sys.stderr)
+            _checklist(run, sys.stderr)
+            return 1
+        if e.strerror and len(e.args) > 1:
+            why = e.strerror
+            if e.filename:  # a file's error (robot.json a folder, say): its name first
+                why = "%s: %s" % (e.filename, why)
         else:
-            why = e.strerror if e.strerror and len(e.args) > 1 else str(e)
+            why = str(e)
         print("busservo: %s" % why, file=sys.stderr)
         return 1
     except KeyboardInterrupt:

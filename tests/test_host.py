@@ -5,14 +5,19 @@
 import errno
 import io
 import os
+import select
 import shutil
 import signal
 import subprocess
 import sys
 import tempfile
+import threading
 import time
+import tty
+import types
 import unittest
 from contextlib import redirect_stderr, redirect_stdout
+from unittest import mock
 
 import busservo
 import busservo_host
@@ -28,6 +33,131 @@ def busservo_command(*args):
     with redirect_stdout(out), redirect_stderr(err):
         status = busservo_host.main([str(a) for a in args])
     return status, out.getvalue(), err.getvalue()
+
+
+def at_a_terminal():
+    # Ctrl-C's signal as at a terminal (a job in the background of tests/run.sh's shell
+    # starts with it ignored).
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+def command_process(*args, cwd=None):
+    """`busservo ARGS` in a process of its own, its output read line by line."""
+    return subprocess.Popen(
+        [PYTHON, "-m", "busservo_host"] + [str(a) for a in args],
+        env=dict(os.environ, PYTHONPATH=os.path.join(ROOT, "lib"), PYTHONUNBUFFERED="1"),
+        cwd=cwd,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=at_a_terminal,
+    )
+
+
+COMPLETE = bytes.fromhex("55550508010100")  # ACTION_GROUP_COMPLETE: group 1, once
+
+
+class Peer:
+    """A controller scripted in a thread at the far end of a pty (path), as one on a
+    USB-serial adapter is: it answers the battery (7500 mV) and positions (500 each) after
+    `delay` s (None: never, as a controller with its TX unplugged), and with `flood` sends
+    ACTION_GROUP_COMPLETE frames back to back, at 9600 baud's pace, all along (for 30 s at
+    most). `frames` holds every frame it was sent; `read_bps` paces its reading (None: all
+    there is, at once). The default delay, 30 ms, is a real controller's on USB: the wire's
+    time and the adapter's latency."""
+
+    FLOOD_S = 30
+
+    def __init__(self, delay=0.03, flood=False, read_bps=None):
+        self.delay = delay
+        self.flood = flood
+        self.read_bps = read_bps
+        self.master, self.slave = os.openpty()
+        tty.setraw(self.slave)
+        os.set_blocking(self.master, False)
+        self.path = os.ttyname(self.slave)
+        self.frames = []
+        self.received = 0  # bytes
+        self.flooding = flood
+        self._done = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def close(self):
+        self._done.set()
+        self._thread.join()
+        os.close(self.master)
+        os.close(self.slave)
+
+    def _answer(self, frame):
+        if frame[3] == 0x0F:  # the battery
+            return bytes.fromhex("5555040F4C1D")
+        if frame[3] == 0x15:  # positions
+            n = frame[4]
+            reply = bytearray(b"\x55\x55" + bytes([3 * n + 3, 0x15, n]))
+            for servo_id in frame[5 : 5 + n]:
+                reply += bytes([servo_id, 500 & 0xFF, 500 >> 8])
+            return bytes(reply)
+        return None
+
+    def _write(self, data):
+        try:
+            os.write(self.master, data)
+        except BlockingIOError:
+            pass  # nobody reads: dropped, as a line does
+
+    def _run(self):
+        start = time.monotonic()
+        sent = 0  # flood bytes
+        buf = bytearray()
+        due = []  # [(when, reply)]
+        while not self._done.is_set():
+            select.select([self.master], [], [], 0.002)
+            now = time.monotonic()
+            try:
+                got = os.read(self.master, 4096 if self.read_bps is None else 64)
+            except OSError:  # BlockingIOError: nothing came
+                got = b""
+            self.received += len(got)
+            buf += got
+            if got and self.read_bps:
+                time.sleep(len(got) / self.read_bps)
+            while len(buf) >= 4:
+                if buf[:2] != b"\x55\x55":
+                    del buf[0]
+                    continue
+                end = buf[2] + 2
+                if len(buf) < end:
+                    break
+                frame = bytes(buf[:end])
+                del buf[:end]
+                self.frames.append(frame)
+                reply = self._answer(frame)
+                if reply and self.delay is not None:
+                    due.append((now + self.delay, reply))
+            while due and due[0][0] <= now:
+                self._write(due.pop(0)[1])
+            if self.flooding:
+                if now - start > self.FLOOD_S:
+                    self.flooding = False
+                # 7 bytes at 9600 baud each 7.3 ms: none missing from the wire's pace
+                while sent * 10 / 9600 <= now - start:
+                    self._write(COMPLETE)
+                    sent += len(COMPLETE)
+
+
+class WithPeers(unittest.TestCase):
+    def setUp(self):
+        self.peers = []
+
+    def tearDown(self):
+        for peer in self.peers:
+            peer.close()
+
+    def peer(self, *args, **kwargs):
+        peer = Peer(*args, **kwargs)
+        self.peers.append(peer)
+        return peer
 
 
 def wait_for(path, seconds):
@@ -164,6 +294,197 @@ class OnAPty(Scratch):
         self.assertIn("is gone (unplugged?)", err)
         self.assertNotIn("Traceback", err)
 
+    def test_ctrl_c_stops_a_move_where_the_servo_is(self):
+        # As the panel's STOP does: where it is, read, is where it goes (not on to 900).
+        move = command_process("move", self.link, 1, 900, 20000, CHECKED)
+        try:
+            self.assertIn("this moves it to 900", move.stdout.readline())
+            time.sleep(0.5)
+            move.send_signal(signal.SIGINT)
+            out, err = move.communicate(timeout=10)
+        finally:
+            move.kill()
+            move.wait()
+        self.assertEqual(move.returncode, 130, out + err)
+        self.assertIn("stopped: servo 1 holds at", out)
+        time.sleep(0.3)  # the stop's own 100 ms
+        status, first, _ = busservo_command("positions", self.link, 1)
+        time.sleep(0.5)  # 10 positions more on the way to 900, had it gone on
+        self.assertEqual(busservo_command("positions", self.link, 1), (0, first, ""))
+        self.assertLess(int(first.split()[1]), 900)
+        self.assertIn("holds at %s" % first.split()[1], out)
+
+    def test_ctrl_c_stops_an_action_group_and_stop_stops_one_left_running(self):
+        group = command_process("group", self.link, 2, 0, CHECKED)  # until stopped
+        try:
+            self.assertIn("action group 2 runs until stopped", group.stdout.readline())
+            group.send_signal(signal.SIGINT)
+            out, err = group.communicate(timeout=10)
+        finally:
+            group.kill()
+            group.wait()
+        self.assertEqual(group.returncode, 130, out + err)
+        self.assertIn("stopped action group 2", out)
+        self.assertEqual(
+            busservo_command("stop", self.link), (0, "no action group was running\n", "")
+        )
+        # A group left running (its command killed): stop stops it.
+        group = command_process("group", self.link, 2, 0, CHECKED)
+        try:
+            self.assertIn("runs until stopped", group.stdout.readline())
+        finally:
+            group.kill()
+            group.wait()
+        status, out, err = busservo_command("stop", self.link)
+        self.assertEqual((status, out), (0, "stopped the action group that ran\n"), err)
+
+    def test_a_group_runs_once_told_and_says_when_it_is_done(self):
+        status, out, err = busservo_command("group", self.link, 1)
+        self.assertEqual(status, 1, out + err)
+        self.assertIn("nothing moved", out)
+        self.assertIn(CHECKED, out)
+        self.assertEqual(busservo_command("stop", self.link)[1], "no action group was running\n")
+        status, out, err = busservo_command("group", self.link, 1, 2, CHECKED)  # 2 x 500 ms
+        self.assertEqual(status, 0, out + err)
+        self.assertEqual(
+            out, "action group 1 runs 2 times (Ctrl-C stops it)\naction group 1 done\n"
+        )
+        status, out, err = busservo_command("group", self.link, 7, CHECKED)  # no group 7
+        self.assertEqual(status, 1, out + err)
+        self.assertIn("action group 7 did not start", out)
+
+    def test_the_panel_caps_each_joints_dps_on_a_real_controller(self):
+        # A slider dragged fast would whip the arm: on a real controller each joint turns
+        # at 30 degrees a second at most; the simulated one needs no such care.
+        import busservo_web
+
+        served = []
+
+        async def serve(robot, password, port=80, arm=None, path="robot.json", host="0.0.0.0"):
+            served.append((robot, port, host))
+
+        with mock.patch.object(busservo_web, "serve", serve):
+            status, out, err = busservo_command(
+                "panel", self.link, "--password", "a password!", "--port", 8123, CHECKED
+            )
+            self.assertEqual(status, 0, out + err)
+            robot, port, host = served.pop()
+            self.assertEqual((port, host), (8123, "0.0.0.0"))  # every interface, by default
+            self.assertEqual(
+                {name: robot.joints[name].dps for name in robot.names},
+                {"base": 30, "shoulder": 30, "elbow": 30, "claw": 30},
+            )
+            status, out, err = busservo_command(
+                "panel", "--sim", "--password", "a password!", "--host", "127.0.0.1"
+            )
+            self.assertEqual(status, 0, out + err)
+            robot, port, host = served.pop()
+            self.assertEqual((port, host), (8080, "127.0.0.1"))
+            self.assertEqual({robot.joints[name].dps for name in robot.names}, {None})
+
+
+class ScriptedPeers(WithPeers):
+    """The command against a controller scripted in the test: silent, slow, or talking
+    without a pause."""
+
+    def assert_no_answer(self, command, said):
+        status, out, err = said
+        self.assertEqual(status, 1, command)
+        self.assertIn("no answer from the controller on %s within" % command[1], out + err)
+        self.assertIn("1. the controller is powered", out + err)
+        self.assertNotIn("Traceback", err)
+
+    def test_a_silent_controller_gets_the_checklist_from_each_command(self):
+        # OSError(ETIMEDOUT) has its errno on CPython too: not "busservo: 110".
+        port = self.peer(delay=None).path
+        for command in (
+            ("check", port),
+            ("positions", port, 1, 2),
+            ("move", port, 1, 800, 100, CHECKED),
+            ("panel", port, "--password", "a password!", CHECKED),
+            ("scan", port),
+            ("limp", port, 1),
+            ("group", port, 1, CHECKED),
+            ("stop", port),
+        ):
+            said = busservo_command(*command)
+            self.assert_no_answer(command, said)
+            self.assertIn("within 5", said[1] + said[2])  # 500 ms, and 10 more a servo
+        self.assertEqual(
+            busservo_command("check", port)[1].split("\n")[0][-22:], "within 500 ms. Check:"
+        )
+
+    def test_the_command_waits_for_a_controller_behind_usb(self):
+        # USB adds its latency to the wire's (16 ms of an FTDI's timer, a busy computer):
+        # 250 ms is beyond the driver's default timeout, within the command's.
+        port = self.peer(delay=0.25).path
+        self.assertEqual(busservo_command("positions", port, 1, 2), (0, "1: 500\n2: 500\n", ""))
+        status, out, err = busservo_command("check", port)
+        self.assertEqual(status, 0, out + err)
+        self.assertIn("battery: 7.50 V", out)
+        # --timeout: the user's, for each query.
+        command = ("positions", port, 1, "--timeout", 50)
+        self.assert_no_answer(command, busservo_command(*command))
+        time.sleep(0.5)  # its reply, come late, goes by
+        self.assertEqual(
+            busservo_command("positions", port, 1, "--timeout", 2000), (0, "1: 500\n", "")
+        )
+
+    def test_a_query_ends_while_the_controller_talks_without_a_pause(self):
+        # Frames that answer nothing, back to back: the query ends at its time all the
+        # same, not when the line falls quiet.
+        peer = self.peer(delay=None, flood=True)
+        for command in (("check", peer.path), ("positions", peer.path, 1)):
+            self.assert_no_answer(command, busservo_command(*command))
+            self.assertTrue(peer.flooding, "the query ended only once the controller stopped")
+
+    def test_limp_lets_the_servos_go(self):
+        peer = self.peer()
+        status, out, err = busservo_command("limp", peer.path, 1, 2)
+        self.assertEqual(status, 0, out + err)
+        self.assertEqual(
+            out, "servos 1, 2 are limp: turn them by hand; each holds again when moved\n"
+        )
+        self.assertEqual(peer.frames[-1], bytes.fromhex("55550514020102"))  # UNLOAD 1, 2
+
+    def test_nothing_moves_until_told(self):
+        peer = self.peer()
+        for command in (
+            ("move", peer.path, 1, 800, 100),
+            ("group", peer.path, 1),
+            ("panel", peer.path, "--password", "a password!"),
+        ):
+            status, out, err = busservo_command(*command)
+            self.assertEqual(status, 1, out + err)
+            self.assertIn("nothing moved", out)
+            self.assertIn("then add " + CHECKED, out)
+        # What went: queries (battery 0F, positions 15) alone.
+        self.assertEqual({frame[3] for frame in peer.frames}, {0x0F, 0x15})
+
+    def test_a_full_transmit_buffer_is_no_unplugged_port(self):
+        # A burst of moves fills the OS's buffer faster than the line empties it: write()
+        # takes what fits, or nothing (None), as a board's UART does, and the driver waits
+        # for room; the port is not "gone".
+        peer = self.peer(read_bps=20000)  # slower than the burst, faster than the wire
+        uart = busservo_host.serial_port(peer.path)
+        try:
+            took = 10
+            for _ in range(10000):  # up to 100 kB at once: more than the OS holds
+                took = uart.write(bytes(10))
+                if took is None:
+                    break
+            self.assertIsNone(took)
+            bus = busservo.BusServo(uart)
+            for i in range(2500):  # 25 kB more: the driver waits for room
+                bus.move(1, i % 1000, 100)
+            end = time.monotonic() + 60
+            while len(peer.frames) < 2500 and time.monotonic() < end:
+                time.sleep(0.05)
+            self.assertEqual(len(peer.frames), 2500)  # each whole, none lost
+            self.assertEqual(peer.frames[-1], bytes.fromhex("55550803016400" "01F301"))  # 499
+        finally:
+            uart.close()
+
 
 class CommandLine(Scratch):
     def test_no_such_port(self):
@@ -178,7 +499,7 @@ class CommandLine(Scratch):
     def test_bad_input_is_refused_before_anything_is_opened_or_moved(self):
         for command, words in (
             (("positions", "--sim", "x"), "an id must be a number in 0..254, got 'x'"),
-            (("positions", "--sim"), "positions wants one id or more"),
+            (("positions", "--sim"), "positions wants 1..84 ids, got 0"),
             (("move", "--sim", 300, 500, 1000), "ID must be a number in 0..254, got '300'"),
             (("move", "--sim", 1, 5000, 1000), "POS must be a number in 0..1000, got '5000'"),
             (("move", "--sim", 1, 500), "move wants ID POS MS"),
@@ -209,6 +530,145 @@ class CommandLine(Scratch):
             self.assertIn("busservo " + command, out)
         self.assertEqual(busservo_command()[0], 2)
         self.assertEqual(busservo_command("ports")[0], 0)
+
+    def test_version(self):
+        for flag in ("--version", "-V"):
+            self.assertEqual(
+                busservo_command(flag), (0, "busservo %s\n" % busservo.__version__, "")
+            )
+
+    def test_the_limits_and_the_calibration_file_are_usage_errors_not_tracebacks(self):
+        ids = range(1, 86)
+        self.assertEqual(
+            busservo_command("positions", "--sim", *ids),
+            (2, "", "busservo: positions wants 1..84 ids, got 85 (busservo --help)\n"),
+        )
+        self.assertEqual(busservo_command("limp", "--sim", *range(253))[0], 2)
+        here = os.getcwd()
+        os.chdir(self.scratch)  # robot.json is read from the folder the command runs in
+        try:
+            for text, words in (
+                ('{"links": {"upper_arm": 100}}', "robot.json: no 'joints' in it"),
+                ('{"joints": ', "robot.json: not valid JSON"),
+                ('{"joints": {"base": {"servo_id": 1, "speed": 2}}}', "robot.json: joint 'base'"),
+                ('{"joints": {"base": {"servo_id": 300}}}', "servo_id must be"),
+            ):
+                with open("robot.json", "w") as f:
+                    f.write(text)
+                status, out, err = busservo_command("panel", "--sim", "--password", "long enough")
+                self.assertEqual((status, out), (2, ""), text + err)
+                self.assertIn(words, err)
+                self.assertIn("mend it, or move it away", err)
+            os.remove("robot.json")
+            os.mkdir("robot.json")
+            status, out, err = busservo_command("panel", "--sim", "--password", "long enough")
+            self.assertEqual((status, err), (1, "busservo: robot.json: Is a directory\n"))
+        finally:
+            os.chdir(here)
+
+    def test_a_file_or_a_folder_is_not_a_serial_port(self):
+        path = os.path.join(self.scratch, "notes.txt")
+        with open(path, "w") as f:
+            f.write("not a port")
+        for port, what in (
+            (path, "is not a serial port but a file"),
+            (self.scratch, "is not a serial port but a folder"),
+            (os.devnull, "is not a serial port"),  # a device, but no tty
+        ):
+            for command in (("check", port), ("positions", port, 1)):
+                self.assertEqual(
+                    busservo_command(*command),
+                    (
+                        1,
+                        "",
+                        "busservo: %s %s (busservo ports lists those there are)\n" % (port, what),
+                    ),
+                )
+            with self.assertRaises(OSError) as caught:
+                busservo_host.serial_port(port)
+            self.assertEqual(caught.exception.errno, errno.ENOTTY)
+
+    def test_no_permission_on_the_port_is_the_dialout_hint_not_busy(self):
+        # What pyserial raises when the OS refuses to open the port (here as root, who may
+        # open anything, the refusal is os.open's, as a user outside dialout gets it).
+        refused = PermissionError(errno.EACCES, "Permission denied")
+        with mock.patch.object(os, "open", side_effect=refused):
+            with self.assertRaises(OSError) as caught:
+                busservo_host.serial_port("/dev/ttyUSB0")
+        e = caught.exception
+        self.assertEqual(e.errno, errno.EACCES)
+        self.assertIn("no permission to open /dev/ttyUSB0", str(e))
+        self.assertIn("sudo usermod -aG dialout $USER", str(e))
+        self.assertNotIn("busy", str(e))
+
+    def test_json(self):
+        import json
+
+        status, out, err = busservo_command("positions", "--sim", 1, 7, "--json")
+        self.assertEqual((status, json.loads(out)), (1, {"1": 500, "7": None}))
+        self.assertEqual(err, "1: 500\n7: no answer\n")  # the words, beside
+        status, out, _ = busservo_command("--json", "scan", "--sim")
+        self.assertEqual((status, json.loads(out)), (0, {str(i): 500 for i in range(1, 7)}))
+        status, out, _ = busservo_command("check", "--sim", "--json")
+        got = json.loads(out)
+        self.assertEqual((status, got["battery_mv"], got["noise"]), (0, 7500, 0))
+        self.assertGreater(got["round_trip_ms"], 0)
+        status, out, _ = busservo_command("move", "--sim", 2, 600, 50, "--json")
+        self.assertEqual(json.loads(out), {"servo": 2, "from": 500, "to": 600, "at": 600})
+        status, out, _ = busservo_command("ports", "--json")
+        self.assertIsInstance(json.loads(out), list)
+
+    def test_options_are_checked_as_the_words_are(self):
+        for command, words in (
+            (("positions", "--sim", 1, "--timeout", 0), "--timeout must be a number in 1..60000"),
+            (("positions", "--sim", 1, "--timeout"), "--timeout wants a value: --timeout MS"),
+            (("positions", "--sim", 1, "--port", 80), "positions takes no --port"),
+            (("panel", "--sim", "--password", "long enough", "--json"), "panel takes no --json"),
+            (("check", "--sim", "--fast"), "no option '--fast'"),
+            (("scan", "--sim", 3), "scan takes PORT only"),
+            (("group", "--sim"), "group wants N [TIMES]"),
+            (("group", "--sim", 256), "N must be a number in 0..255, got '256'"),
+            (("limp", "--sim"), "limp wants 1..252 ids, got 0"),
+            (("--json",), "no command"),
+        ):
+            status, out, err = busservo_command(*command)
+            self.assertEqual((status, out), (2, ""), command)
+            self.assertIn(words, err)
+
+    def test_the_new_commands_on_the_simulated_controller(self):
+        self.assertEqual(
+            busservo_command("scan", "--sim"),
+            (0, "".join("%d: 500\n" % i for i in range(1, 7)), ""),
+        )
+        self.assertEqual(busservo_command("limp", "--sim", 1)[0], 0)
+        status, out, _ = busservo_command("group", "--sim", 1)  # nothing real to check
+        self.assertEqual((status, out.split("\n")[-2]), (0, "action group 1 done"))
+        self.assertEqual(
+            busservo_command("stop", "--sim"), (0, "no action group was running\n", "")
+        )
+
+    def test_a_command_imports_no_asyncio_it_does_not_use(self):
+        # CPython's asyncio took most of a `busservo positions`: the modules that use it
+        # (busservo_async, busservo_web) import it, through busservo_cpython, themselves.
+        run = subprocess.run(
+            [
+                PYTHON,
+                "-c",
+                "import sys, busservo_host; busservo_host.main(['positions', '--sim', '1']); "
+                "print(sorted({'asyncio', 'json'} & set(sys.modules)))",
+            ],
+            env=dict(os.environ, PYTHONPATH="lib"),
+            capture_output=True,
+            text=True,
+        )
+        self.assertEqual(run.stdout, "1: 500\n[]\n", run.stderr)
+        run = subprocess.run(
+            [PYTHON, "-c", "import busservo_async; print(busservo_async.asyncio.sleep_ms)"],
+            env=dict(os.environ, PYTHONPATH="lib"),
+            capture_output=True,
+            text=True,
+        )
+        self.assertIn("function", run.stdout, run.stderr)
 
     def test_ports_lists_the_usb_ones_first_with_their_chip(self):
         from serial.tools import list_ports_common
@@ -282,6 +742,76 @@ class CommandLine(Scratch):
                 panel.kill()
                 panel.wait()
         self.assertEqual(panel.returncode, 130)
+
+
+class HIDControllers(unittest.TestCase):
+    """PORT hid and hid:PATH, and `busservo ports`, with a stand-in for busservo_hid: its
+    ports() and hid_port(port) (a simulated controller, as a UART)."""
+
+    def setUp(self):
+        from serial.tools import list_ports
+
+        import busservo_sim
+
+        self.opened = []
+        fake = types.ModuleType("busservo_hid")
+        fake.found = [("hid:/dev/hidraw3", "xArm controller (USB 0483:5750)")]
+
+        def hid_port(port="hid"):
+            if not fake.found:
+                raise OSError(errno.ENOENT, "no HID controller found: plug it in")
+            self.opened.append(port)
+            return busservo_sim.SimController()
+
+        fake.ports = lambda: list(fake.found)
+        fake.hid_port = hid_port
+        self.fake = fake
+        self.patches = [
+            mock.patch.dict(sys.modules, {"busservo_hid": fake}),
+            mock.patch.object(list_ports, "comports", lambda: []),
+        ]
+        for patch in self.patches:
+            patch.start()
+
+    def tearDown(self):
+        for patch in self.patches:
+            patch.stop()
+
+    def test_ports_lists_them_beside_the_serial_ones(self):
+        self.assertEqual(
+            busservo_command("ports"),
+            (0, "hid:/dev/hidraw3  xArm controller (USB 0483:5750)\n", ""),
+        )
+        self.fake.found = []
+        status, out, _ = busservo_command("ports")
+        self.assertIn("no serial ports and no HID controllers: plug", out)
+
+    def test_every_command_takes_one_as_port(self):
+        self.assertEqual(busservo_command("positions", "hid", 1, 2), (0, "1: 500\n2: 500\n", ""))
+        status, out, err = busservo_command("check", "hid:/dev/hidraw3")
+        self.assertEqual(status, 0, out + err)
+        self.assertIn("battery: 7.50 V", out)
+        self.assertEqual(self.opened, ["hid", "hid:/dev/hidraw3"])
+        self.fake.found = []
+        self.assertEqual(
+            busservo_command("check", "hid"),
+            (1, "", "busservo: no HID controller found: plug it in\n"),
+        )
+
+    def test_without_busservo_hid(self):
+        with mock.patch.dict(sys.modules, {"busservo_hid": None}):  # import fails
+            self.assertEqual(
+                busservo_command("ports"),
+                (
+                    0,
+                    "no serial ports and no HID controllers: "
+                    "plug the controller's USB cable in (a data cable)\n",
+                    "",
+                ),
+            )
+            status, out, err = busservo_command("check", "hid")
+            self.assertEqual(status, 1)
+            self.assertIn("no busservo_hid module for hid", err)
 
 
 class WhatCPythonLacks(unittest.TestCase):
