@@ -481,7 +481,7 @@ class ScriptedPeers(WithPeers):
             while len(peer.frames) < 2500 and time.monotonic() < end:
                 time.sleep(0.05)
             self.assertEqual(len(peer.frames), 2500)  # each whole, none lost
-            self.assertEqual(peer.frames[-1], bytes.fromhex("55550803016400" "01F301"))  # 499
+            self.assertEqual(peer.frames[-1], bytes.fromhex("5555080301640001F301"))  # 499
         finally:
             uart.close()
 
@@ -902,6 +902,16 @@ class Install(Scratch):
         self.assertIn("battery", done.stdout)
         venv = os.path.join(self.scratch, "busservo-venv")
         bin_ = os.path.join(venv, "bin")
+        # What the build says, in full (pip install -v .): nothing it takes is deprecated
+        # (pyproject.toml's license as a table was, for an SPDX string).
+        build = subprocess.run(
+            [bin_ + "/pip", "wheel", "-v", "--no-deps", "-w", self.scratch + "/wheel", source],
+            capture_output=True,
+            text=True,
+            env=env,
+        )
+        self.assertEqual(build.returncode, 0, build.stdout + build.stderr)
+        self.assertNotIn("DeprecationWarning", build.stdout + build.stderr)
         run = subprocess.run(
             [bin_ + "/busservo", "positions", "--sim", "1", "2"],
             capture_output=True,
