@@ -274,6 +274,7 @@ class _Run:
         if "--timeout" in options:
             self.timeout = _int(options["--timeout"], "--timeout", 1, 60000)
         self.port = None
+        self.uart = None  # the port, once open: main() closes it
         self.waited = _TIMEOUT_MS  # the last query's timeout, for the words when it ran out
 
     def ms(self, ids=0):
@@ -356,7 +357,8 @@ def _bus(run):
         sim = busservo_sim.SimController()
         sim.missing.update(i for i in range(256) if i not in _SIM_SERVOS)  # as a 6-servo arm
         return busservo.BusServo(sim), True
-    return busservo.BusServo(_open(run.port)), False
+    run.uart = _open(run.port)
+    return busservo.BusServo(run.uart), False
 
 
 def _checklist(run, out):
@@ -496,10 +498,13 @@ def _limp(run, words, options):
     bus, _ = _bus(run)
     _answers(bus, run)
     bus.unload(ids)
-    run.say(
-        "servos %s are limp: turn them by hand; each holds again when moved"
-        % ", ".join(str(i) for i in ids)
-    )
+    if len(ids) == 1:
+        run.say("servo %d is limp: turn it by hand; it holds again when moved" % ids[0])
+    else:
+        run.say(
+            "servos %s are limp: turn them by hand; each holds again when moved"
+            % ", ".join(str(i) for i in ids)
+        )
     return 0
 
 
@@ -729,6 +734,10 @@ def main(argv=None):
         return 1
     except KeyboardInterrupt:
         return 130
+    finally:
+        close = getattr(run and run.uart, "close", None)
+        if close:
+            close()
 
 
 def _entry():
