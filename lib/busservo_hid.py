@@ -20,9 +20,9 @@
 # - ccourson/xArmServoController (PyPI's `xarm`), Python/xarm/controller.py: opens 0483:5750
 #   with cython-hidapi (`hid.device`, by serial number or path), non-blocking; a command is
 #   one output report, `00 55 55 Len Cmd Params`: report id 0, then the frame; a reply is
-#   read as a 64-byte input report with the frame at its start, and what follows the frame
-#   is not read. Its battery read tries 5 times, a second apart, as the controller "sometimes
-#   takes a second or two" to answer just after it is opened.
+#   read as a 64-byte input report (waiting 50 ms at most) with the frame at its start, and
+#   what follows the frame is not used. Its battery read tries 5 times, a second apart, as
+#   the controller "sometimes takes a second or two" to answer just after it is opened.
 # - adeguet1/lewansoul-xarm (src/lewansoul_xarm/controller.py) and dmklee/nuro-arm
 #   (nuro_arm/robot/xarm_controller.py), through easyhid, which puts the report id 0 before
 #   what it is given: the same frames, the reply at the start of the report, positions
@@ -125,11 +125,10 @@ def _open_error(hid, port, path, e):
             "%s, in /etc/udev/rules.d/70-busservo.rules, then sudo udevadm control "
             "--reload-rules, sudo udevadm trigger, and plug it in again" % (text, UDEV_RULE),
         )
-    return OSError(
-        errno.EIO,
-        "could not open %s: %s (another program may have it: close it, or plug the "
-        "controller in again)" % (port, e),
-    )
+    why = "another program may have it: close it, or plug the controller in again"
+    if sys.platform.startswith("linux"):
+        why += "; or no permission: docs/computer.md's udev rule"
+    return OSError(errno.EIO, "could not open %s: %s (%s)" % (port, e, why))
 
 
 def hid_port(port="hid"):
