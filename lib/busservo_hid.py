@@ -5,7 +5,7 @@
 #
 #   import busservo, busservo_hid
 #   bus = busservo.BusServo(busservo_hid.hid_port())   # the first one plugged in
-#   busservo_hid.ports()    # [("hid:/dev/hidraw3", "LOBOT (USB HID 0483:5750)")]
+#   busservo_hid.ports()    # [("hid:/dev/hidraw3", "MyUSB_HID LOBOT (USB HID 0483:5750, ...)")]
 #
 # hid_port() gives the UART methods the driver uses, as busservo_host.serial_port() does:
 # any() and readinto() never wait (they read the reports that have come, without
