@@ -196,18 +196,20 @@ def links():
     """The links measured with a ruler, {name: mm}, or None: left out."""
     if busservo_board.simulated or button:
         return None
+    from busservo_arm import LINKS  # the arm's names for them
+
     while True:
-        names = " ".join(bc.LINKS)
+        names = " ".join(LINKS)
         line = ask("links in mm, axis to axis (%s), or Enter to leave them out:" % names)
         if not line:
             return None
         try:
             mm = [float(x) for x in line.split()]
-            if len(mm) == len(bc.LINKS):
-                return dict(zip(bc.LINKS, mm))
+            if len(mm) == len(LINKS):
+                return dict(zip(LINKS, mm))
         except ValueError:
             pass
-        print("  %d numbers in mm, such as: 70 105 98 60" % len(bc.LINKS))
+        print("  %d numbers in mm, such as: 70 105 98 60" % len(LINKS))
 
 
 arm = None

@@ -40,7 +40,7 @@ _TIMEOUT_MS = const(100)  # battery: 10 bytes at 9600 baud take about 10 ms
 _TIMEOUT_PER_ID_MS = const(10)  # 4 more bytes on the wire and one servo to ask
 _TIMEOUT_MAX_MS = const(60000)
 _LATE_MS = const(100)  # how long after its query gave up a reply may still come
-_FORGET_MS = const(1000)  # a request given up on this long ago had its reply lost
+_FORGET_MS = const(1000)  # a query listens first for a reply given up on up to this long ago
 _GAP_MS = const(20)  # a frame's bytes come closer together than this, FIFOs and all
 _TICKS = const(0x3FFFFFFF)  # ticks modulo 2**30, as a 32-bit port's wrap
 _HALF = const(0x20000000)  # half of that: a later time, or an earlier one
@@ -65,14 +65,14 @@ def _check(name, value, low, high):
 
 def _count(name, items, high):
     # How many items a sequence argument holds, refused unless 1..high.
-    error = ValueError
     try:
         n = len(items)
-    except TypeError:
-        n = items  # not a sequence at all (one id, say): say what it is
-        error = TypeError
-    if error is TypeError or not 1 <= n <= high:
-        raise error("%s must be a list of 1..%d items, got %r" % (name, high, n))
+    except TypeError:  # not a sequence at all (one id, say): show it as one
+        raise TypeError(
+            "%s must be a list of 1..%d items, such as [%r], got %r" % (name, high, items, items)
+        )
+    if not 1 <= n <= high:
+        raise ValueError("%s must be a list of 1..%d items, got %d of them" % (name, high, n))
     return n
 
 
@@ -109,12 +109,15 @@ class BusServo:
         # requests in flight, then [battery, positions] to those a query gave up
         # on (see ask()); then [battery, positions]: when (ticks_ms) the last
         # request of each kind has left the wire, and the last of those given up
-        # on. And the ids of the positions asked last, with a bit for each count
-        # of ids a positions request in flight asked for.
-        self._waiting = [0, 0, 0, 0, 0, 0, 0, 0]
+        # on; then [battery, positions]: 1 if a reply that fits the request in
+        # flight came too soon for it and was taken for a late one (see _apply).
+        # And the ids of the positions asked last, with a bit for each count of
+        # ids a positions request in flight asked for.
+        self._waiting = [0, 0, 0, 0, 0, 0, 0, 0, 0, 0]
         self._asked = bytearray(96)  # count, ids; from 85, bit n of 85..95: n ids (1..84)
         self.noise = 0  # bytes read that were no frame of the controller's
         self.lost = 0  # frames not held because the queue was full
+        self.early = 0  # replies taken that came sooner than the wire at baudrate allows
         self.running = False
         self.group = None
         self.times = 0
@@ -234,6 +237,7 @@ class BusServo:
                 for i in range(n + 1):
                     asked[i] = tx[4 + i]  # the count and the ids, as sent
             waiting[kind] += 1
+            waiting[kind + 8] = 0
 
     def _group_cmd(self, cmd, group, name, value):
         _check("group", group, 0, 0xFF)
@@ -368,8 +372,9 @@ class BusServo:
         if self._cut_at:
             self._finish()  # a request cut short goes first: its reply is waited out
         start = time.ticks_add(time.ticks_ms(), self.wire_ms())  # when the wire is free
-        if waiting[kind + 2] and (start - waiting[kind + 6]) & _TICKS > _FORGET_MS:
-            waiting[kind + 2] = 0  # given up on long ago: lost, not late
+        # Those given up on long ago are not listened for (their replies were likely lost),
+        # but still counted: a reply too soon for this query may be one of them.
+        gone = (start - waiting[kind + 6]) & _TICKS > _FORGET_MS
         while True:  # decode what has come first: none of it answers this query
             got = self._next_frame()
             if got is None:
@@ -382,7 +387,7 @@ class BusServo:
                 now = time.ticks_ms()
                 waited = time.ticks_diff(now, start)
                 if (
-                    not (waiting[kind] or waiting[kind + 2])
+                    not (waiting[kind] or waiting[kind + 2] and not gone)
                     or waited > timeout_ms + _LATE_MS
                     or not waiting[kind]
                     and waited > _GAP_MS
@@ -391,10 +396,11 @@ class BusServo:
                     break
                 yield
             self._hold(got)
-        # What has not come by now is given up on (and forgotten _FORGET_MS after
-        # the last such request). Yet it may come, later still: the next queries
-        # wait for it as above, and take no reply for their answer that came before
-        # their request could have been answered (see _apply).
+        # What has not come by now is given up on (and listened for no longer
+        # _FORGET_MS after the last such request). Yet it may come, later still: the
+        # next queries wait for it as above, and while any is given up on take no
+        # reply for their answer that came before their request could have been
+        # answered (see _apply).
         if waiting[kind]:
             waiting[kind + 6] = waiting[kind + 4]  # when the last of them left the wire
             waiting[kind + 2] += waiting[kind]
@@ -413,7 +419,14 @@ class BusServo:
             if not waiting[kind]:
                 return  # the reply: it matched the request
             if got is None and late or late > _QUEUE:
-                raise OSError(errno.ETIMEDOUT)
+                if waiting[kind + 8]:
+                    # A reply that fits came too soon and was taken for a late one, and
+                    # none came after it: it was this one (and the late ones were lost,
+                    # as the controller answers in turn). A peer faster than the wire.
+                    waiting[kind] = waiting[kind + 2] = 0
+                    self.early += 1
+                    return
+                raise OSError(errno.ETIMEDOUT, "no reply")
             if got is None:
                 yield
             self._hold(got)
@@ -556,23 +569,30 @@ class BusServo:
             baud = self._baud
             came = self._heard - (self._w - self._r) * 9000 // baud
             came -= waiting[kind + 4] + (rx[f + 2] + 2) * 10000 // baud  # its earliest
-            answers = came & _TICKS < _HALF
+            early = came & _TICKS >= _HALF
+            fits = True
             if kind:  # and only if they have its ids, in order
                 asked = self._asked
-                answers = answers and asked[0] == rx[f + 4]
+                fits = asked[0] == rx[f + 4]
                 k = 1
                 for i in range(f + 5, f + 5 + 3 * rx[f + 4], 3):
                     # Signed 16-bit, as a servo near 0 may say -3; FFFF (-1) is what
                     # a servo that does not answer (unpowered, missing) reads as: None.
                     position = ((rx[i + 1] | rx[i + 2] << 8) ^ 0x8000) - 0x8000
                     self.positions[rx[i]] = None if position == -1 else position
-                    answers = answers and asked[k] == rx[i]
+                    fits = fits and asked[k] == rx[i]
                     k += 1
             else:
                 self.battery = rx[f + 4] | rx[f + 5] << 8
-            # It answers the oldest request of its kind in flight (if it does not match
-            # that, an older one's, if there is one), or else one a query gave up on.
-            if waiting[kind] and (answers or waiting[kind] > 1):
+            # It answers the oldest request of its kind in flight if it fits it and came in
+            # time for it, or sooner with none given up on: then nothing else can be its
+            # answer, and the peer is faster than baudrate says (counted in early). If it
+            # does not answer that, it answers an older one in flight, if there is one, or
+            # else one a query gave up on (one that fits may still be the query's: ask()).
+            if waiting[kind] and (fits and not (early and waiting[kind + 2]) or waiting[kind] > 1):
                 waiting[kind] -= 1
+                if early and fits:
+                    self.early += 1
             elif waiting[kind + 2]:
                 waiting[kind + 2] -= 1
+                waiting[kind + 8] = waiting[kind] and fits

@@ -87,6 +87,11 @@ class BusServo:
     lost: int
     """Frames dropped because more than 32 came in during one query without a poll(): never
     expected at 9600 baud, but counted rather than hidden."""
+    early: int
+    """Replies taken for answers that came sooner than the wire at baudrate allows: 0 with a
+    controller at the speed baudrate says. Growing: the peer is faster (a controller set to
+    another speed, one on USB HID, a fake or simulator that answers at once). Nothing is
+    wrong with that; the driver only cannot tell a late reply from a fast one then."""
 
     def __init__(self, uart: _UART, baudrate: int = 9600) -> None:
         """The controller on uart: machine.UART(..., 9600), or any object with any(),
@@ -161,13 +166,16 @@ class BusServo:
         Replies to earlier requests of its kind (request_battery(), a query that timed out)
         come first, as events: it lets them come, for as long as it would wait for its own
         reply and 100 ms more, before it asks (for those a query gave up on already, within
-        the last second: while replies keep coming). No reply that came before this request
-        could have been answered (while it was still on the wire, or before the reply's own
-        bytes could follow it) is taken for its answer; a late one that lands just when the
-        answer could is, once. Frames that come in meanwhile are applied to the state at
-        once and returned by the next poll() calls. Raises ValueError or TypeError for a bad
-        timeout_ms (before anything is written), and OSError(EIO) if the UART takes
-        nothing."""
+        the last second: while replies keep coming). A reply that comes sooner than the
+        wire allows (this request still on the wire, or the reply's own bytes not yet come)
+        answers it when nothing else can: no request of its kind was given up on (a peer
+        faster than baudrate: counted in early). While one was, such a reply is taken for
+        that one's late reply, unless this query's own never comes: then it was this
+        query's (one query waits out its timeout). A late one that lands just when the
+        answer could is taken for it, once. Frames that come in meanwhile are applied to the
+        state at once and returned by the next poll() calls. Raises ValueError or TypeError
+        for a bad timeout_ms (before anything is written), and OSError(EIO) if the UART
+        takes nothing. OSError's errno is errno.ETIMEDOUT on CPython too."""
     def read_positions(
         self, ids: Sequence[int], timeout_ms: int | None = None
     ) -> dict[int, int | None]:

@@ -65,6 +65,25 @@ def _number(name, value, low=-_INF, high=_INF):
     return value
 
 
+def check_links(links):
+    """{name: mm} of the four LINKS, each a number in 0..10000 mm, upper_arm and forearm more
+    than 0 (the one check of an arm's links: busservo_calibrate and the panel use it), or
+    TypeError or ValueError naming what is wrong."""
+    if _type(links) is not dict:
+        raise TypeError("links must be a dict {name: mm}, got %r" % (links,))
+    for name in links:
+        if name not in LINKS:
+            raise ValueError("links: no link %r: the links are %s" % (name, ", ".join(LINKS)))
+    for name in LINKS:
+        if name not in links:
+            raise ValueError("links: %r is missing (the links are %s)" % (name, ", ".join(LINKS)))
+        _number("links[%r]" % name, links[name], 0, 10000)
+    for name in ("upper_arm", "forearm"):
+        if not links[name]:
+            raise ValueError("links[%r] must be more than 0 mm, got 0" % name)
+    return {name: links[name] for name in LINKS}
+
+
 def _wrap(degrees):
     # The same angle in -180..180.
     while degrees > 180:
@@ -96,22 +115,8 @@ class Arm:
                 "an arm needs joints %s: no %s among %s"
                 % (", ".join(JOINTS), ", ".join(missing), ", ".join(robot.names))
             )
-        if _type(links) is not dict:
-            raise TypeError("links must be a dict {name: mm}, got %r" % (links,))
-        for name in links:
-            if name not in LINKS:
-                raise ValueError("links: no link %r: the links are %s" % (name, ", ".join(LINKS)))
-        for name in LINKS:
-            if name not in links:
-                raise ValueError(
-                    "links: %r is missing (the links are %s)" % (name, ", ".join(LINKS))
-                )
-            _number("links[%r]" % name, links[name], 0)
-        for name in ("upper_arm", "forearm"):
-            if not links[name]:
-                raise ValueError("links[%r] must be more than 0 mm, got 0" % name)
+        links = self.links = check_links(links)
         self.robot = robot
-        self.links = {name: links[name] for name in LINKS}
         self.elbow_up = bool(elbow_up)
         self._b = float(links["base_height"])
         self._u = float(links["upper_arm"])

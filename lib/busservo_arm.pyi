@@ -36,6 +36,11 @@ JOINTS: tuple[str, ...]
 LINKS: tuple[str, ...]
 """The links, in mm: ("base_height", "upper_arm", "forearm", "hand")."""
 
+def check_links(links: Mapping[str, float]) -> dict[str, float]:
+    """{name: mm} of the four LINKS, each a number in 0..10000 mm, upper_arm and forearm more
+    than 0: the one check of an arm's links (Arm(), busservo_calibrate's save() and the
+    panel's calibration page use it). Raises TypeError or ValueError naming what is wrong."""
+
 class Arm:
     """A Robot's base, shoulder, elbow and wrist as an arm, in millimetres."""
 
@@ -51,9 +56,8 @@ class Arm:
 
     def __init__(self, robot: Robot, links: dict[str, float], elbow_up: bool = True) -> None:
         """robot: a busservo_motion.Robot with joints named base, shoulder, elbow and wrist
-        (others are left alone); links: {name: mm} of the four LINKS, upper_arm and forearm
-        more than 0, base_height and hand 0 or more. Raises ValueError or TypeError saying
-        what is missing or wrong."""
+        (others are left alone); links: {name: mm} of the four LINKS, as check_links() takes
+        them. Raises ValueError or TypeError saying what is missing or wrong."""
     @staticmethod
     def load(
         bus_or_robot: BusServo | Robot, path: str = "robot.json", elbow_up: bool = True

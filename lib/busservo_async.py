@@ -141,7 +141,7 @@ class AsyncBusServo:
                     timeout_ms is not None
                     and time.ticks_diff(time.ticks_ms(), start) >= timeout_ms
                 ):
-                    raise OSError(errno.ETIMEDOUT)
+                    raise OSError(errno.ETIMEDOUT, "the group did not end in time")
                 await asyncio.sleep_ms(self.poll_ms)
         finally:
             self._waiters.remove(waiter)

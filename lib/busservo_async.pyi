@@ -105,3 +105,7 @@ class AsyncBusServo:
     @property
     def noise(self) -> int:
         """BusServo.noise: bytes read that were no frame of the controller's."""
+    @property
+    def early(self) -> int:
+        """BusServo.early: replies taken that came sooner than the wire at its baudrate
+        allows (a peer faster than that)."""

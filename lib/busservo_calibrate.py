@@ -35,7 +35,6 @@ MARGIN = 3  # degrees kept inside the range seen, at each end
 RANGE_MIN = 10  # degrees a joint's range must span
 STILL = 2  # degrees seen under which a joint did not move (a hand's tremor, a read's noise)
 NUDGE_MIN = 5  # degrees a nudge must go, from the rest pose, to tell the direction
-LINKS = ("base_height", "upper_arm", "forearm", "hand")  # mm, as busservo_arm reads them
 
 _HALF = {bm.BUS: 120, bm.PWM_180: 90, bm.PWM_270: 135}  # each kind's degrees either side
 
@@ -201,23 +200,16 @@ class Calibration:
 
     def save(self, path=None, links=None):
         """Write the calibration to path (default busservo_board.CALIBRATION, robot.json)
-        as Robot.load() reads it, with links {name: mm} of LINKS if given (measured with a
-        ruler, for busservo_arm), keeping what else the file holds (links saved before).
-        Refuses as robot() does, before the file is touched. Returns the Robot."""
+        as Robot.load() reads it, with links {name: mm} if given (measured with a ruler, for
+        busservo_arm, which checks them), keeping what else the file holds (links saved
+        before). Refuses as robot() does, before the file is touched. Returns the Robot."""
         robot = self.robot()
-        more = {} if links is None else {"links": _links(links)}
+        more = {}
+        if links is not None:
+            from busservo_arm import check_links  # only with links: the arm is their owner
+
+            more["links"] = check_links(links)
         if path is None:
             from busservo_board import CALIBRATION as path
         robot.save(path, **more)  # what else the file holds (the links measured before) kept
         return robot
-
-
-def _links(links):
-    # {name: mm} of every name in LINKS, each a number 0..10000, or ValueError saying so.
-    if type(links) is not dict or sorted(links) != sorted(LINKS):
-        raise ValueError("links must be {%s} in mm, got %r" % (", ".join(LINKS), links))
-    for name in LINKS:
-        mm = links[name]
-        if type(mm) is not int and type(mm) is not float or not 0 <= mm <= 10000:
-            raise ValueError("links[%r] must be 0..10000 mm, got %r" % (name, mm))
-    return {name: links[name] for name in LINKS}

@@ -43,8 +43,6 @@ STILL: int
 """Degrees seen under which a joint did not move (a hand's tremor, a read's noise): 2."""
 NUDGE_MIN: int
 """Degrees a nudge must go from the rest pose to tell the direction: 5."""
-LINKS: tuple[str, ...]
-"""The links save() takes, in mm: ("base_height", "upper_arm", "forearm", "hand")."""
 
 class Calibration:
     """One arm's calibration by hand, a step at a time."""
@@ -86,8 +84,8 @@ class Calibration:
         ValueError naming each joint that cannot be calibrated and why."""
     def save(self, path: str | None = None, links: Mapping[str, float] | None = None) -> Robot:
         """Write the calibration to path (default busservo_board.CALIBRATION, robot.json) as
-        Robot.load() reads it, with links {name: mm} of LINKS if given (measured with a ruler,
-        for busservo_arm): {"joints": {name: Joint settings}, "links": {...}}, keeping what
-        else the file holds (links saved before). Refuses as
-        robot() does, and links that are not LINKS in 0..10000 mm, before the file is
-        touched. Returns the Robot."""
+        Robot.load() reads it, with links {name: mm} of busservo_arm.LINKS if given (measured
+        with a ruler, for busservo_arm): {"joints": {name: Joint settings}, "links": {...}},
+        keeping what else the file holds (links saved before). Refuses as robot() does, and
+        links that busservo_arm.check_links() refuses (TypeError or ValueError), before the
+        file is touched. Returns the Robot."""

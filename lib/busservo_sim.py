@@ -28,8 +28,8 @@
 # - it is at the far end of a 9600-baud line (`baudrate`; 10 bits a byte): a frame
 #   written to it is in once its last byte would have arrived, and what it says
 #   comes out a byte every 1.04 ms behind what it said before. So a reply comes
-#   no sooner than on a real wire, where the driver looks for it (baudrate=None:
-#   no line, every byte at once, for a test world that models the line itself).
+#   no sooner than on a real wire (baudrate=None: no line, every byte at once, as
+#   a peer faster than the wire; or for a test world that models the line itself).
 # Time comes from time.ticks_ms(), or from the ticks_ms function given, which a
 # test can step. Setting `silent` makes it answer nothing at all, as a controller
 # with its TX unplugged; so does the frame 55 55 03 F0 01 (F0 00 undoes it),

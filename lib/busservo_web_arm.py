@@ -180,7 +180,7 @@ async def calibrate(panel, body, token):
             links = panel.arm.links  # the arm's, kept
         try:
             robot = cal.save(panel.path, links)
-        except ValueError as e:
+        except (TypeError, ValueError) as e:
             raise web._Refused(400, str(e))
         except OSError as e:  # the board's filesystem
             raise web._Refused(500, "could not save %s: %r" % (panel.path, e))

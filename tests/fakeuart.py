@@ -3,6 +3,7 @@
 #   uart = FakeUART()
 #   uart.feed(b"\x55\x55\x02\x07")             # bytes the controller "sent"
 #   uart.reply(request, response, delay_ms=5)  # answer a write, 5 ms later than the wire could
+#   FakeUART(at_once=True)                     # a peer faster than the wire: answers at once
 #   uart.chunks = [1]                          # readinto() hands out 1 byte a call
 #   uart.takes = [3, None]                     # write() takes 3 bytes, then none, then all
 #   uart.written()                             # every byte the driver wrote
@@ -13,14 +14,18 @@
 # Like a controller on a 9600-baud line, a scripted reply comes no sooner than
 # the wire allows: once the request's last byte has left (behind what was
 # written before it, a byte every 1042 us) and the reply's own bytes have come.
+# With at_once, as a peer faster than that (a controller at another baud rate,
+# one on USB HID, the fake a user writes first): readable as soon as the
+# request's last byte is written, within that write() (delay_ms after it, if given).
 import time
 
 BYTE_US = 1042  # 10 bits at 9600 baud, rounded up
 
 
 class FakeUART:
-    def __init__(self, chunks=None):
-        self.chunks = chunks  # sizes readinto() hands out in turn; None: all asked for
+    def __init__(self, chunks=None, at_once=False):
+        self.chunks = chunks
+        self.at_once = at_once  # sizes readinto() hands out in turn; None: all asked for
         self._turn = 0
         self._in = bytearray()
         self._head = 0
@@ -144,9 +149,13 @@ class FakeUART:
                 response = answer[0]
                 if isinstance(response, list):
                     response = response.pop(0) if response else None
-                if response:
-                    wire_us = time.ticks_diff(self._idle, time.ticks_us())
-                    wire_us += len(response) * BYTE_US
+                if response and self.at_once and not answer[1]:
+                    self.feed(response)
+                elif response:
+                    wire_us = 0
+                    if not self.at_once:
+                        wire_us = time.ticks_diff(self._idle, time.ticks_us())
+                        wire_us += len(response) * BYTE_US
                     self.feed_later(response, answer[1] + (wire_us + 999) // 1000)
                 return
             for request in self._replies:

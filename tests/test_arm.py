@@ -250,6 +250,8 @@ class Refusals(Tidy):
             (lambda: ba.Arm(robot(bus), dict(LINKS, claw=20)), ("no link 'claw'",)),
             (lambda: ba.Arm(robot(bus), dict(LINKS, forearm=-98)), ("forearm", "-98")),
             (lambda: ba.Arm(robot(bus), dict(LINKS, upper_arm=0)), ("upper_arm", "more than 0")),
+            (lambda: ba.Arm(robot(bus), dict(LINKS, forearm=0)), ("forearm", "more than 0")),
+            (lambda: ba.Arm(robot(bus), dict(LINKS, hand=10001)), ("hand", "0..10000")),
         ):
             raises(call, *words)
         settle(w, bus, 50)

@@ -191,11 +191,41 @@ class Async(unittest.TestCase):
         self.assertEqual([bus.poll() for _ in range(5)], [7, 7, 7, 7, None])
         self.assertEqual(bus.lost, 2)
 
+    def test_a_timeout_has_its_errno_on_every_python(self):
+        # As test_queries' test of that name, for the queries and wait_group_done().
+        for call in (
+            lambda: self.bus.read_battery(timeout_ms=10),
+            lambda: self.bus.read_positions([1], timeout_ms=10),
+            lambda: self.bus.wait_group_done(timeout_ms=10),
+        ):
+            try:
+                run(call())
+            except OSError as e:
+                self.assertEqual(e.errno, errno.ETIMEDOUT)
+            else:
+                self.fail("no timeout")
+
     def test_bad_timeouts_are_refused(self):
         with self.assertRaises(ValueError):
             run(self.bus.read_battery(timeout_ms=-1))
         with self.assertRaises(TypeError):
             run(self.bus.wait_group_done(timeout_ms=1.5))
+
+
+class APeerFasterThanTheWire(unittest.TestCase):
+    # As test_queries' class of that name: a reply sooner than 9600 baud allows answers.
+    def test_queries(self):
+        uart = FakeUART(at_once=True)
+        uart.reply(GET_BATTERY, BATTERY_7500)
+        uart.reply(READ_1_TO_6, POSITIONS_ALL_500)
+        bus = AsyncBusServo(uart, poll_ms=1)
+
+        async def main():
+            return await bus.read_battery(), await bus.read_positions(range(1, 7))
+
+        self.assertEqual(run(main()), (7500, ALL_500))
+        self.assertEqual(run(main()), (7500, ALL_500))
+        self.assertEqual(bus.early, 4)
 
 
 if __name__ == "__main__":

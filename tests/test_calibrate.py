@@ -9,6 +9,7 @@ import os
 import unittest
 
 import busservo
+import busservo_arm
 import busservo_board
 import busservo_calibrate as bc
 import busservo_motion as bm
@@ -421,10 +422,13 @@ class File(unittest.TestCase):
             {"base_height": 70, "upper_arm": "105", "forearm": 98, "hand": 60},
             {"base_height": 70, "upper_arm": 105, "forearm": 98, "hand": 60, "claw": 20},
             [70, 105, 98, 60],
+            # What Arm.load() would refuse is refused here: one check of the links.
+            {"base_height": 70, "upper_arm": 0, "forearm": 98, "hand": 60},
+            {"base_height": 70, "upper_arm": 105, "forearm": 0, "hand": 60},
         ):
             cal = bc.Calibration(self.bus, IDS)
             calibrate(self.w, cal)
-            with self.assertRaises(ValueError):
+            with self.assertRaises((TypeError, ValueError)):
                 cal.save(self.path, links)
         self.assertEqual(self.read(), "the calibration before")
 
@@ -444,7 +448,7 @@ class Picture(unittest.TestCase):
         self.assertEqual(out.split(), ["{http://www.w3.org/2000/svg}svg", "800", "500"], out)
         with open(self.SVG) as f:
             text = f.read()
-        for name in tuple(IDS) + ("roll",) + bc.LINKS:
+        for name in tuple(IDS) + ("roll",) + busservo_arm.LINKS:
             self.assertIn(">%s<" % name, text)
         with open("docs/calibrate.md") as f:
             self.assertIn("](calibrate-rest-pose.svg)", f.read())

@@ -234,7 +234,7 @@ class Pages(unittest.TestCase):
                 self.assertTrue(words in text, "%s: no %r" % (doc, words))
         text = read("docs/troubleshooting.md")
         for symptom in (
-            "`OSError: [Errno 110] ETIMEDOUT`",
+            "`OSError: [Errno 110] ETIMEDOUT: no reply`",
             "`bus.noise` grows",
             "`OSError: [E",
             "`mpremote: no device found`",

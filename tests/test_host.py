@@ -393,5 +393,31 @@ class Install(Scratch):
         self.assertTrue(page.stdout.startswith("True " + venv), page.stdout + page.stderr)
 
 
+class APtyThatAnswersAtOnce(Scratch):
+    # A controller on a pty that answers the moment a request is in (tests/pty_peer.py), as a
+    # simulator a user writes does: every reply comes sooner than 9600 baud allows, and
+    # nothing else can be its answer. The driver takes it, and so does the command.
+    def setUp(self):
+        super().setUp()
+        self.link = os.path.join(self.scratch, "peer")
+        self.peer = subprocess.Popen([PYTHON, "tests/pty_peer.py", self.link, "30"])
+        self.assertTrue(wait_for(self.link, 10), "the peer did not start")
+
+    def tearDown(self):
+        self.peer.kill()
+        self.peer.wait()
+        super().tearDown()
+
+    def test_queries_and_the_command(self):
+        with busservo_host.serial_port(self.link) as uart:
+            bus = busservo.BusServo(uart)
+            for _ in range(3):
+                self.assertEqual(bus.read_battery(timeout_ms=1000), 7500)
+                self.assertEqual(bus.read_positions([1, 2], timeout_ms=1000), {1: 500, 2: 500})
+            self.assertTrue(bus.early > 0, bus.early)
+        status, out, err = busservo_command("positions", self.link, 1, 2)
+        self.assertEqual((status, out), (0, "1: 500\n2: 500\n"), err)
+
+
 if __name__ == "__main__":
     unittest.main()

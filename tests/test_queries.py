@@ -82,6 +82,21 @@ class Queries(unittest.TestCase):
         self.assertTrue(timed_out(lambda: self.bus.read_positions([1, 2], timeout_ms=10)))
         self.assertTrue(timed_out(lambda: self.bus.read_battery(timeout_ms=0)))
 
+    def test_a_timeout_has_its_errno_on_every_python(self):
+        # OSError(110) made with one argument has errno None on CPython: `e.errno ==
+        # errno.ETIMEDOUT` would never match there, and the busservo command printed "110".
+        for call in (
+            lambda: self.bus.read_battery(timeout_ms=10),
+            lambda: self.bus.read_positions([1], timeout_ms=10),
+        ):
+            try:
+                call()
+            except OSError as e:
+                self.assertEqual(e.errno, errno.ETIMEDOUT)
+                self.assertIn("no reply", str(e))
+            else:
+                self.fail("no timeout")
+
     def test_a_half_reply_times_out(self):
         self.uart.reply(GET_BATTERY, BATTERY_7500[:5])
         self.assertTrue(timed_out(lambda: self.bus.read_battery(timeout_ms=20)))
@@ -177,6 +192,97 @@ class Queries(unittest.TestCase):
             self.bus.read_positions([1, 300])
         self.assertEqual(self.bus.poll(), CMD_ACTION_GROUP_STOP)
         self.assertEqual(self.uart.writes, 0)
+
+
+class UsersFake:
+    """The fake UART a user writes first, to try a program with no controller: it answers
+    each request inside write(), as fast as a computer can, whatever the baud rate."""
+
+    def __init__(self):
+        self.out = bytearray()
+
+    def any(self):
+        return len(self.out)
+
+    def readinto(self, buf, n=None):
+        n = min(len(buf), len(self.out), len(buf) if n is None else n)
+        buf[:n] = self.out[:n]
+        self.out = self.out[n:]
+        return n or None
+
+    def write(self, buf, off=None, n=None):
+        frame = bytes(buf[: len(buf) if off is None else off] if n is None else buf[off : off + n])
+        if frame[3] == 0x0F:  # the battery: 7500 mV
+            self.out += BATTERY_7500
+        elif frame[3] == 0x15:  # positions: every servo at 500
+            count = frame[4]
+            self.out += bytes((0x55, 0x55, 3 * count + 3, 0x15, count))
+            for servo_id in frame[5 : 5 + count]:
+                self.out += bytes((servo_id, 0xF4, 0x01))
+        return len(frame)
+
+
+class APeerFasterThanTheWire(unittest.TestCase):
+    # A peer may answer sooner than 9600 baud allows: the user's own fake, a simulator on a
+    # pty, a controller set to another speed, one on USB HID. Where no request of that kind
+    # was given up on, nothing else can be the reply's answer: it answers, and is counted.
+    def setUp(self):
+        self.uart = FakeUART(at_once=True)
+        self.uart.reply(GET_BATTERY, BATTERY_7500)
+        self.uart.reply(READ_1_TO_6, POSITIONS_ALL_500)
+        self.bus = busservo.BusServo(self.uart)
+
+    def test_read_battery(self):
+        self.assertEqual(self.bus.read_battery(), 7500)
+        self.assertEqual(self.bus.read_battery(), 7500)
+        self.assertEqual(self.bus.early, 2)
+        self.assertIsNone(self.bus.poll())
+
+    def test_read_positions(self):
+        self.assertEqual(self.bus.read_positions([1, 2, 3, 4, 5, 6]), ALL_500)
+        self.assertEqual(self.bus.read_positions([1, 2, 3, 4, 5, 6]), ALL_500)
+        self.assertEqual(self.bus.early, 2)
+        self.assertIsNone(self.bus.poll())
+
+    def test_requests_answered_through_poll_leave_nothing_to_wait_for(self):
+        self.bus.request_positions([1, 2, 3, 4, 5, 6])
+        self.bus.request_battery()
+        self.assertEqual([self.bus.poll(), self.bus.poll(), self.bus.poll()], [21, 15, None])
+        self.assertEqual((self.bus.positions, self.bus.battery), (ALL_500, 7500))
+        start = time.ticks_ms()  # both were answered: a query waits for neither
+        self.assertEqual(self.bus.read_positions([1, 2, 3, 4, 5, 6]), ALL_500)
+        self.assertEqual(self.bus.read_battery(), 7500)
+        self.assertTrue(time.ticks_diff(time.ticks_ms(), start) < 100)
+
+    def test_the_fake_a_user_writes_first(self):
+        bus = busservo.BusServo(UsersFake())
+        self.assertEqual(bus.read_battery(), 7500)
+        self.assertEqual(bus.read_positions([3, 1]), {3: 500, 1: 500})
+        bus.request_positions([2])
+        self.assertEqual((bus.poll(), bus.positions[2]), (CMD_MULT_SERVO_POS_READ, 500))
+
+    def test_after_a_query_timed_out_one_waits_its_timeout_then_every_one_is_answered(self):
+        # A reply that comes too soon while one given up on may still come is taken for that
+        # one; if the query's own never comes, it was the query's after all.
+        uart = FakeUART(at_once=True)
+        bus = busservo.BusServo(uart)
+        self.assertTrue(timed_out(lambda: bus.read_battery(timeout_ms=20)))  # unplugged
+        uart.reply(GET_BATTERY, BATTERY_7500)  # and plugged in again
+        self.assertEqual(bus.read_battery(timeout_ms=20), 7500)
+        start = time.ticks_ms()
+        for _ in range(5):
+            self.assertEqual(bus.read_battery(timeout_ms=20), 7500)
+        self.assertTrue(time.ticks_diff(time.ticks_ms(), start) < 100)
+
+    def test_a_peer_as_slow_as_the_wire_is_never_early(self):
+        uart = FakeUART()
+        uart.reply(GET_BATTERY, BATTERY_7500)
+        uart.reply(READ_1_TO_6, POSITIONS_ALL_500)
+        bus = busservo.BusServo(uart)
+        for _ in range(3):
+            self.assertEqual(bus.read_battery(), 7500)
+            self.assertEqual(bus.read_positions([1, 2, 3, 4, 5, 6]), ALL_500)
+        self.assertEqual(bus.early, 0)
 
 
 if __name__ == "__main__":

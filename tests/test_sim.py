@@ -413,6 +413,18 @@ class Line(unittest.TestCase):
         # No sooner than the wire allows: 10 bytes, then 7 + 11 bytes.
         self.assertTrue(time.ticks_diff(time.ticks_ms(), start) >= 28)
 
+    def test_with_no_line_it_answers_at_once_and_the_driver_takes_it(self):
+        # baudrate=None, as the header offers it: every byte at once.
+        sim = SimController(baudrate=None)
+        sim.write(BATTERY)
+        self.assertEqual(sim.read(), BATTERY_7500)
+        bus = busservo.BusServo(sim)
+        self.assertEqual(bus.read_battery(), 7500)
+        self.assertEqual(bus.read_positions([1, 2]), {1: 500, 2: 500})
+        bus.request_positions([3])
+        self.assertEqual((bus.poll(), bus.positions[3]), (busservo.CMD_MULT_SERVO_POS_READ, 500))
+        self.assertEqual(bus.early, 3)
+
 
 class Hands(unittest.TestCase):
     # SimController.turn(): a person's hand. It turns a limp servo, as a hand turns a servo

@@ -369,5 +369,32 @@ class UnreadPty(unittest.TestCase):
         self.assertTrue(time.ticks_diff(time.ticks_ms(), start_ms) < 1000)
 
 
+class APtyThatAnswersAtOnce(unittest.TestCase):
+    # A controller on a pty that answers the moment a request is in (tests/pty_peer.py), as a
+    # simulator a user writes does: no line between, so every reply comes sooner than 9600
+    # baud allows. Nothing else can be its answer: the driver takes it.
+    def setUp(self):
+        self.link = scratch("peer")
+        self.pid = start(".venv/bin/python tests/pty_peer.py " + self.link, self.link + ".log")
+        self.assertTrue(wait_for(self.link), "the peer did not start")
+        from unix import uart
+
+        self.uart = uart(self.link)
+
+    def tearDown(self):
+        self.uart.close()
+        stop(self.pid)
+        os.system("rm -f %s %s.log" % (self.link, self.link))
+
+    def test_queries_are_answered(self):
+        import busservo
+
+        bus = busservo.BusServo(self.uart)
+        for _ in range(3):
+            self.assertEqual(bus.read_battery(timeout_ms=1000), 7500)
+            self.assertEqual(bus.read_positions([1, 2], timeout_ms=1000), {1: 500, 2: 500})
+        self.assertTrue(bus.early > 0, bus.early)
+
+
 if __name__ == "__main__":
     unittest.main()

@@ -1668,6 +1668,27 @@ class Calibrating(Tidy):
 
         on_arm(scenario)
 
+    def test_links_the_arm_would_refuse_are_refused_and_nothing_is_saved(self):
+        # One check of the links: an upper_arm or a forearm of 0 cannot make an arm, so the
+        # page does not save them (once, an upper_arm of 0 was saved, and Arm.load() failed).
+        async def scenario(port, world, robot, path):
+            token = await armed(port)
+            with open(path) as f:
+                before = f.read()
+            status, reply = await calibrate(port, world, token)
+            self.assertEqual(status, 200, reply)
+            for name in ("upper_arm", "forearm"):
+                links = dict(LINKS, **{name: 0})
+                status, reply = await http(
+                    port, "POST", "/api/calibrate", {"step": "save", "links": links}, token
+                )
+                self.assertEqual(status, 400, reply)
+                self.assertIn("links[%r] must be more than 0 mm" % name, reply["error"])
+            with open(path) as f:
+                self.assertEqual(f.read(), before)
+
+        on_arm(scenario)
+
     def test_a_calibration_it_cannot_trust_is_refused_naming_the_joint_and_saves_nothing(self):
         async def scenario(port, world, robot, path):
             token = await armed(port)
