@@ -58,11 +58,14 @@ class Controller:
         self.plugged = True
         self.denied = False  # opening it fails, as hidapi fails without permission
         self.said = bytearray()  # what the sim said that makes no whole frame yet
+        self.script = None  # or a function: a frame received -> the reports it answers with
 
     def receive(self, data):
         self.got.append(data)
-        if self.sim is not None:
-            frame = data[1 : 1 + data[3] + 2]  # the report id, then the frame
+        frame = data[1 : 1 + data[3] + 2]  # the report id, then the frame
+        if self.script is not None:
+            self.reports += self.script(frame)
+        elif self.sim is not None:
             self.sim.write(frame)
 
     def answer(self):
@@ -483,6 +486,28 @@ class Driver(WithBinding):
         self.assertEqual(bus.poll(), CMD_ACTION_GROUP_RUN)
         self.assertEqual(bus.poll(), busservo.CMD_ACTION_GROUP_STOP)
         self.assertFalse(bus.running)
+
+    def test_every_reply_is_early_and_a_late_one_is_not_the_next_answer(self):
+        # At USB speed every reply comes sooner than 9600 baud allows: counted, and taken.
+        self.assertEqual(self.bus.read_battery(), 7500)
+        self.assertEqual(self.bus.read_positions([1, 2]), {1: 500, 2: 500})
+        self.assertEqual(self.bus.early, 2)
+        # The next battery request goes unanswered; its reply (7000) comes only once the one
+        # after it is asked, right before that one's own: the query takes its own.
+        asked = []
+
+        def script(frame):
+            asked.append(frame)
+            if len(asked) == 1:
+                return []
+            return [bytes.fromhex("5555040f581b") + bytes(58), BATTERY_7500 + bytes(58)]
+
+        self.xarm.script = script
+        with self.assertRaises(OSError) as caught:
+            self.bus.read_battery()
+        self.assertEqual(caught.exception.errno, errno.ETIMEDOUT)
+        self.assertEqual(self.bus.read_battery(), 7500)
+        self.assertEqual(asked, [GET_BATTERY, GET_BATTERY])
 
     def test_a_group_runs_to_its_end(self):
         self.sim.groups[1] = 0  # a group that ends at once
