@@ -49,11 +49,12 @@ MPY="test_commands test_sim test_async test_motion test_arm test_calibrate test_
 # what it lacks, tests/cpython.py the tests), labelled "(CPython)": the driver's, the
 # simulator's, the wire world's, asyncio's, the motion's, the arm's, the calibration's and the
 # panel's, and test_host (the serial port through pyserial on a pty, the busservo command,
-# pip install .), which runs on CPython only (CPY_ONLY). test_wire and test_soak look at the
-# world's own heap and its MicroPython-style asyncio: not on CPython.
+# pip install .) and test_hid (a USB HID controller through a fake hidapi binding, and the real
+# binding with nothing plugged in), which run on CPython only (CPY_ONLY). test_wire and
+# test_soak look at the world's own heap and its MicroPython-style asyncio: not on CPython.
 CPY="test_frames test_commands test_queries test_sim test_reliability test_async test_motion"
-CPY="$CPY test_arm test_calibrate test_web test_host"
-CPY_ONLY="test_host"
+CPY="$CPY test_arm test_calibrate test_web test_host test_hid"
+CPY_ONLY="test_host test_hid"
 # The longest modules start first, so that the short ones fill the other cores meanwhile and
 # the run ends soon after its longest module does (in the order of their times, measured).
 SLOW="test_soak test_browser test_examples test_web test_host test_reliability test_install"
@@ -180,6 +181,11 @@ for name in $CPY; do
         break
     fi
 done
+
+# hidapi (pinned, as pyproject.toml's hid extra pins it) for test_hid's look at the real binding.
+if selected test_hid; then
+    pip_install hidapi hid 0.15.0 "for the USB HID controllers" "test_hid's real-binding test"
+fi
 
 # resvg-py (a wheel with the resvg renderer compiled in: no system library) lets
 # tests/test_docs.py render the wiring pictures.
