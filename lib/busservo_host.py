@@ -247,6 +247,9 @@ _FLAGS = ("--json", _CHECKED, "-h", "--help", "-V", "--version")
 _TIMEOUT_MS = 500
 _PER_ID_MS = 10
 _IDS_MAX = 84  # positions one query may ask for: the reply must fit in a Length byte
+# Ids a scan asks for at a time: 6 queries; each request fits in a HID controller's report too
+# (64 bytes: 59 ids at most; busservo_hid refuses a longer frame).
+_SCAN_IDS = 50
 _UNLOAD_MAX = 252  # servos one unload may name
 _HALT_MS = 100  # a move stopped by Ctrl-C: the servo goes where it is in this, as the panel's
 # The panel's joints on a real controller turn no faster (degrees a second): a slider dragged
@@ -438,8 +441,8 @@ def _scan(run, words, options):
         raise _Usage("scan takes PORT only")
     bus, _ = _bus(run)
     found = {}
-    for first in range(0, 254, _IDS_MAX):
-        ids = list(range(first, min(first + _IDS_MAX, 254)))
+    for first in range(0, 254, _SCAN_IDS):
+        ids = list(range(first, min(first + _SCAN_IDS, 254)))
         read = bus.read_positions(ids, run.ms(len(ids)))
         found.update((i, read[i]) for i in ids if read[i] is not None)
     run.result({str(i): found[i] for i in found})

@@ -862,6 +862,38 @@ class HIDControllers(unittest.TestCase):
             self.assertIn("no busservo_hid module for hid", err)
 
 
+class OverBusservoHid(unittest.TestCase):
+    """The command over lib/busservo_hid.py itself, with test_hid's fake hidapi binding: an
+    xArm's controller (the simulated one behind it, at USB speed) plugged in."""
+
+    def setUp(self):
+        import busservo_sim
+        import test_hid
+
+        self.xarm = test_hid.Controller(sim=busservo_sim.SimController(baudrate=None))
+        binding = test_hid.Binding(self.xarm)
+        self.patch = mock.patch.dict(sys.modules, {"hid": binding, "hidraw": binding})
+        self.patch.start()
+
+    def tearDown(self):
+        self.patch.stop()
+
+    def test_ports_check_scan_positions_move(self):
+        status, out, err = busservo_command("ports")
+        self.assertEqual(status, 0, err)
+        self.assertTrue(out.startswith("hid:/dev/hidraw3  MyUSB_HID LOBOT (USB HID 0483:5750"))
+        status, out, err = busservo_command("check", "hid")
+        self.assertEqual(status, 0, out + err)
+        self.assertIn("battery: 7.50 V", out)
+        # Each request in one 64-byte report: a scan asks for fewer ids at a time than a
+        # serial port could carry (84).
+        status, out, err = busservo_command("scan", "hid:/dev/hidraw3")
+        self.assertEqual((status, out), (0, "".join("%d: 500\n" % i for i in range(254))), err)
+        self.assertEqual(busservo_command("positions", "hid", 1, 2), (0, "1: 500\n2: 500\n", ""))
+        status, out, err = busservo_command("move", "hid", 1, 800, 0, CHECKED)
+        self.assertEqual((status, out.split("\n")[-2]), (0, "servo 1 is at 800"), err)
+
+
 class WhatCPythonLacks(unittest.TestCase):
     # lib/busservo_cpython.py, as MicroPython has it (the driver's tests on CPython use it all).
     def test_ticks_wrap_at_2_to_the_30_as_on_a_32_bit_board(self):
