@@ -377,25 +377,26 @@ class BusServo:
         gone = (start - waiting[kind + 6]) & _TICKS > _FORGET_MS
         while True:  # decode what has come first: none of it answers this query
             got = self._next_frame()
+            self._hold(got)
+            # Earlier requests of this kind may still be answered: let their replies
+            # come (as events), for as long as this query would wait for its own,
+            # and a late one, in the worst case (however fast other frames come).
+            # Those a query gave up on were waited for so already: now only while
+            # replies keep coming (the controller answers in turn, so a burst of
+            # late replies may come).
+            now = time.ticks_ms()
+            waited = time.ticks_diff(now, start)
+            if waited > timeout_ms + _LATE_MS:
+                break
             if got is None:
-                # Earlier requests of this kind may still be answered: let their
-                # replies come (as events), for as long as this query would wait
-                # for its own, and a late one, in the worst case. Those a query
-                # gave up on were waited for so already: now only while replies
-                # keep coming (the controller answers in turn, so a burst of
-                # late replies may come).
-                now = time.ticks_ms()
-                waited = time.ticks_diff(now, start)
                 if (
                     not (waiting[kind] or waiting[kind + 2] and not gone)
-                    or waited > timeout_ms + _LATE_MS
                     or not waiting[kind]
                     and waited > _GAP_MS
                     and time.ticks_diff(now, self._heard) > _GAP_MS
                 ):
                     break
                 yield
-            self._hold(got)
         # What has not come by now is given up on (and listened for no longer
         # _FORGET_MS after the last such request). Yet it may come, later still: the
         # next queries wait for it as above, and while any is given up on take no

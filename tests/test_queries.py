@@ -274,6 +274,25 @@ class APeerFasterThanTheWire(unittest.TestCase):
             self.assertEqual(bus.read_battery(timeout_ms=20), 7500)
         self.assertTrue(time.ticks_diff(time.ticks_ms(), start) < 100)
 
+    def test_a_query_ends_at_its_time_while_frames_come_faster_than_they_are_read(self):
+        # A peer at USB speed that sends frames back to back (STOPs here), with a request in
+        # flight that nothing answers: the query first waits for that one's reply, then asks
+        # and gives up on its own. Once, it waited for a pause in the frames before it asked.
+        class Flood(FakeUART):
+            left = 200000  # frames still to come: some 20 s of this loop's work at least
+
+            def any(self):
+                if self.left and len(self._in) - self._head < 64:
+                    self.left -= 16
+                    self.feed(STOP * 16)
+                return FakeUART.any(self)
+
+        uart = Flood(at_once=True)
+        bus = busservo.BusServo(uart)
+        bus.request_battery()
+        self.assertTrue(timed_out(lambda: bus.read_battery(timeout_ms=20)))
+        self.assertTrue(uart.left > 0, "it waited for the frames to end")
+
     def test_a_peer_as_slow_as_the_wire_is_never_early(self):
         uart = FakeUART()
         uart.reply(GET_BATTERY, BATTERY_7500)
