@@ -23,7 +23,10 @@ if options.motion or options.web or options.arm or options.calibration:
     module("busservo_motion.py", base_path="lib")
 if options.web:
     module("busservo_web.py", base_path="lib")
-    module("busservo_web_arm.py", base_path="lib")  # its jog and calibration page
+    module("busservo_web_sliders.py", base_path="lib")  # its parts
+    module("busservo_web_teach.py", base_path="lib")
+    module("busservo_web_jog.py", base_path="lib")
+    module("busservo_web_calibrate.py", base_path="lib")
 if options.arm:
     module("busservo_arm.py", base_path="lib")
 if options.calibration:

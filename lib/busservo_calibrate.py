@@ -134,9 +134,18 @@ class Calibration:
                 out[name] = why
         return out
 
-    def _problem(self, i):
-        # Why joint i cannot be calibrated, or None. Degrees here are from its servo's
-        # centre, in the servo's own direction: what the person's hand did.
+    def unswept(self):
+        """{name: why} of each joint whose range seen in step 2 is too small to calibrate
+        (none: {}): the sweep is not done."""
+        out = {}
+        for i, name in enumerate(self.names):
+            why = self._sweep_problem(i)
+            if why:
+                out[name] = why
+        return out
+
+    def _sweep_problem(self, i):
+        # Why joint i's range seen cannot be calibrated, or None.
         joint = self._joints[i]
         lo = self._lo[i]
         hi = self._hi[i]
@@ -152,6 +161,17 @@ class Calibration:
         if span < RANGE_MIN:
             why = "moved through %.1f degrees (%.1f..%.1f), under %d: move it through all its"
             return why % (span, lo, hi, RANGE_MIN) + " safe range"
+        return None
+
+    def _problem(self, i):
+        # Why joint i cannot be calibrated, or None. Degrees here are from its servo's
+        # centre, in the servo's own direction: what the person's hand did.
+        why = self._sweep_problem(i)
+        if why:
+            return why
+        joint = self._joints[i]
+        lo = self._lo[i]
+        hi = self._hi[i]
         if self._rest is None:
             return "no rest pose read: rest() first"
         rest = self._rest[i]

@@ -75,6 +75,9 @@ class Calibration:
     def nudge(self, positions: Mapping[int, int | None] | None = None) -> dict[str, float]:
         """Step 3, after rest(): read how far each joint has been nudged from its rest pose
         (the last call counts). {name: degrees, positive in its servo's own direction}."""
+    def unswept(self) -> dict[str, str]:
+        """{name: why} of each joint whose range seen in step 2 is too small to calibrate
+        (none: {}): the sweep is not done."""
     def problems(self) -> dict[str, str]:
         """{name: why} of each joint the steps so far cannot calibrate (none: {})."""
     def joints(self) -> dict[str, Joint]:

@@ -619,12 +619,6 @@ def _panel(run, words, options):
     host = options.get("--host", _ANY_HOST)
     if not host:
         raise _Usage("--host wants an address of this computer's, or 0.0.0.0 for every one")
-    import busservo_web
-
-    # The page beside busservo_web, in the computer's own way of writing paths.
-    busservo_web._PAGE = os.path.join(
-        os.path.dirname(os.path.abspath(busservo_web.__file__)), "busservo_web.html.gz"
-    )
     bus, simulated = _bus(run)
     robot = _robot(bus, None if simulated else _PANEL_DPS)
     ids = [robot.joints[name].servo_id for name in robot.names]

@@ -1,7 +1,7 @@
 # busservo_web: a control panel for a busservo_motion.Robot, served by the board
-# itself to a browser on the same Wi-Fi (or on the board's own access point):
-# a slider per joint, live positions, the battery, teach and play back, and an
-# emergency stop. It runs on asyncio, beside the robot's own tasks:
+# itself to a browser on the same Wi-Fi (or on the board's own access point). This
+# module is its core: HTTP and safety. What the page does (sliders, teaching and
+# sequences, the arm's jog, the calibration page) are parts that plug into it.
 #
 #   import asyncio, busservo_web
 #   asyncio.run(busservo_web.serve(robot, "a password of yours", port=80))
@@ -11,46 +11,71 @@
 # side is this module's own, and small: a board without PSRAM has about 110 KB of heap
 # once its Wi-Fi is up, and the panel should leave most of it to the robot's program.
 #
-# Safety. Nothing moves until a page is armed (its switch), and only the page
-# that armed can drive. Disarming, closing that page or losing its connection
-# ends the stream: when it has been silent for _DEAD_MS, the stream stops and
-# the joints hold where they are (Robot.hold()), and a sequence stops playing,
-# its pose on the way too (the joints it moves are sent where they are).
-# The stop button (Robot.estop(): every joint limp) works from any logged-in
-# page, armed or not, mid-drag and mid-sequence.
+# Safety. Nothing moves until a page is armed (its switch), and only the page that
+# armed can drive. Disarming, closing that page or losing its connection ends what
+# drives: when it has been silent for _DEAD_MS, every part stops (the stream holds
+# where it is, a sequence stops where the joints are). The stop button (Robot.estop():
+# every joint limp) works from any logged-in page, armed or not, mid-drag and
+# mid-sequence. A page whose arming something else ended is told why (the state's
+# "lost").
 #
-# Security. Without the password only the page itself is served (it shows a
-# login form): every other request gets 401 and does nothing. The password is
-# compared in constant time; a login gives the page a random token that it sends
-# with each request (Authorization: Bearer). Bad input gets a 4xx naming what was
-# wrong and moves nothing. A connection has _HEAD_MS to send its request, of at
-# most _REQUEST bytes (a body of at most _BODY, else 413); connections that say
-# nothing, then those slow to say it, are pushed out by new ones; at most _CLIENTS
-# are answered at once (more get 503), but a logged-in page is (up to twice as
-# many): its STOP gets through. Whatever fails (the RAM, say), the connection is
-# closed, with a 503 if its answer had not begun, and the server goes on.
-# Sequences are saved under sequences/ by a name of letters, digits, - and _.
-# Plain HTTP: anyone who can watch the Wi-Fi can read the password. Use a
-# network you trust, or the board's own access point with a WPA2 key.
+# Security. Without the password only the page itself is served (it shows a login
+# form): every other request gets 401 and does nothing. The password is compared in
+# constant time; a wrong one costs half a second, and more than _WRONG of them a minute
+# from one client (or _WRONG_ALL from all) get 429 until the minute is over. A login's
+# body must be JSON (Content-Type: application/json, which another site's page cannot
+# send without asking), and gives the page a random token that it sends with each
+# request (Authorization: Bearer). The board remembers _SESSIONS logins; a new one
+# forgets the oldest, never the armed page's. Bad input gets a 4xx naming what was
+# wrong and moves nothing. A connection has _HEAD_MS to send its request, of at most
+# _REQUEST bytes (a body of at most _BODY, else 413); connections that say nothing, then
+# those slow to say it, are pushed out by new ones; at most _CLIENTS are answered at
+# once (more get 503), but a logged-in page is (up to twice as many): its STOP gets
+# through. Whatever fails (the RAM, say), the connection is closed, with a 503 if its
+# answer had not begun, and the server goes on. Plain HTTP: anyone who can watch the
+# Wi-Fi can read the password. Use a network you trust, or the board's own access point
+# with a WPA2 key.
 #
-# The loop never waits on the wire: the positions a route needs (arm, capture, add,
-# a stop's halt) are read with the driver's ask(), a step every few ms, so the
-# stream, the dead-man and the other pages go on while the reply is on its way.
+# The loop never waits on the wire: the positions a route needs are read with the
+# driver's ask(), a step every few ms (Panel.positions()), so the stream, the dead-man
+# and the other pages go on while the reply is on its way.
 #
-# What the page asks for (JSON in and out; errors are {"error": "..."}):
+# The core's own routes (JSON in and out; errors are {"error": "..."}):
 #   POST /api/login {"password"}   -> {"token"}
 #   GET  /api/joints               -> [{"name", "lo", "hi"}, ...]
-#   GET  /api/state                -> positions in degrees, battery, armed, sequence, ...
-#   GET  /api/steps                -> the sequence: [{"pose": {name: degrees}, "ms"}, ...]
-#   POST /api/arm {"on"}, /api/target {"targets": {name: degrees}}, /api/estop,
-#        /api/limp, /api/capture -> {"pose"}, /api/add {"pose", "ms"} (no pose: read now),
-#        /api/edit {"index", "pose", "ms"}, /api/remove {"index"}, /api/clear,
-#        /api/play {"speed", "loop"}, /api/stop, /api/save {"name"}, /api/load {"name"}
-#   GET  /api/sequences            -> ["name", ...]
-#   POST /api/jog {"axis": "x"|"y"|"z"|"pitch", "by"} (with an arm: mm, or degrees of pitch)
-#   POST /api/calibrate {"step": "start"|"rest"|"nudge"|"check"|"save"|"home"|"cancel"}
-#        ("save" may give "links" {name: mm}; "home" needs "confirm": true)
-# and GET /favicon.ico -> 204, without a login (a browser asks for it before one).
+#   GET  /api/state                -> positions in degrees, battery, armed, ... (below)
+#   POST /api/arm {"on"}, /api/estop
+# and GET /favicon.ico -> 204, without a login (a browser asks for it before one). The
+# parts add theirs (serve()'s default parts, PARTS below: each module's header lists its).
+#
+# Parts. A part is a module with attach(panel), which registers on the Panel an object
+# (its part) and returns it; the part reaches the core only through this interface
+# (docs/panel.md shows one):
+#   panel.add(part)                     the core calls these methods of part, those it has:
+#                                       get_NAME(body, token) and post_NAME(body, token)
+#                                       answer GET and POST /api/NAME (the answer's JSON, or
+#                                       raise Refused(status, why)); state(out, token) adds
+#                                       its keys to the state; tick(read) each turn of the
+#                                       loop (read: positions came since the last); still(
+#                                       halt) stops what it drives (halt: a sequence's pose
+#                                       on the way too); close() is awaited as serve() ends
+#   panel.order(by)                     a new order, from part `by`: every other part's
+#                                       still(); what began before it (a read) is void.
+#                                       Returns its number: panel.orders is the last's
+#   panel.driving(token, by)            refuse (409) unless token's page is armed, and no
+#                                       part but by holds the joints (panel.busy)
+#   await panel.positions(ids)          {servo_id: position}, read without waiting on the
+#   await panel.where(names)            wire; {name: degrees}, as Robot.where() gives them
+#   panel.pose(pose, what)              a pose {joint: degrees}, checked, or refused (400)
+#   panel.adopt(robot)                  drive another robot (a calibration just saved)
+#   panel.failed(e)                     show an error on the page while it lasts
+#   panel.robot, .bus, .path            the robot, its bus, the calibration file
+#   panel.to, .limp, .armed             targets shown (name: degrees), joints let go, the
+#                                       armed page's token
+#   panel.busy                          (part, why) while a part holds the joints (a
+#                                       sequence playing, a calibration), else None
+#   panel.read_ms                       how often positions are read while a page is open
+#   Refused(status, why), need(body, key, kind, low, high, what): refusals, and checks
 import asyncio
 import json
 import os
@@ -61,48 +86,54 @@ try:
 except ImportError:  # CPython, on a computer: busservo_cpython gives what it lacks
     from busservo_cpython import asyncio, json, time
 
-import busservo_motion as bm
-
 _CLIENTS = 4  # requests being read, and answered, at once
 _HEAD_MS = 1000  # a connection's request must be in within this, or it is closed
 _REQUEST = 4096  # bytes: a request's line, headers and body; a longer one gets 400
 _CLIENT_MS = 10000  # an answer that takes longer is cut
-_SESSIONS = 4  # logins remembered; a new one forgets the oldest
+_SESSIONS = 4  # logins remembered; a new one forgets the oldest (never the armed page's)
+_WRONG = 10  # wrong passwords a minute from one client; more get 429 until the minute is over
+_WRONG_ALL = 30  # wrong passwords a minute from all clients
+_WRONG_MS = 60000
 _BODY = 1024  # bytes: a larger request body gets 413
 _CHUNK = 256  # bytes of the page sent at a time
 _DEAD_MS = 1000  # the armed page silent this long: hold (the dead-man)
 _OPEN_MS = 3000  # a page asked within this: read positions often
 _READ_MS = 150  # positions asked this often while a page is open
 _BATTERY_MS = 2000
-_TICK_MS = 10  # the panel's loop: poll the bus, step the stream and the player
+_TICK_MS = 10  # the panel's loop: poll the bus, step the stream and the parts
 _ASK_MS = 5  # a query's next step: a byte takes 1 ms at 9600 baud
 _ERROR_MS = 3000  # the loop's last error is shown until this long after it last happened
-_FOLDER = "sequences"
-_NAME_MAX = 24
-_MS_DEFAULT = 1000  # time to reach an added pose, if the request gives none
-_HALT_MS = 100  # a sequence stopped mid-pose: the joints go where they are, in this
-_CALIBRATION = "robot.json"  # busservo_board.CALIBRATION: the joints, and an arm's links
-_CAL_READ_MS = 100  # positions read this often while a calibration sweeps or is nudged
-_NAME_CHARS = "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_"
-
+CALIBRATION = "robot.json"  # busservo_board.CALIBRATION: the joints, and an arm's links
+_POSITIONS = 21  # busservo.CMD_MULT_SERVO_POS_READ: a reply of positions
+# The parts serve() plugs in: (module, None: at once; or NAME: when /api/NAME is first asked
+# for, or, with a condition, when condition(panel) holds: at the start, or once a
+# calibration is saved). The jog and the calibration page are loaded only when used: a panel
+# without an arm keeps their RAM, and busservo_arm's and busservo_calibrate's, for the
+# robot's program.
+PARTS = (
+    ("busservo_web_sliders", None),
+    ("busservo_web_teach", None),
+    ("busservo_web_jog", "jog", lambda panel: panel.arm or panel.saved("links")),
+    ("busservo_web_calibrate", "calibrate"),
+)
 
 # The page: beside this module (installed by mip or mpremote, or on the unix port), else in
 # /lib (a module frozen into the firmware has no folder on the filesystem). Found here, at
 # import, rather than by a function: the module's own code goes once it has run, and the RAM
-# it took is the robot program's.
+# it took is the robot program's. serve(page=...) gives another.
 try:
-    _PAGE = __file__.rpartition("/")[0] or "."
+    PAGE = __file__.replace("\\", "/").rpartition("/")[0] or "."  # (Windows: backslashes)
 except NameError:
-    _PAGE = "/lib"
-for _folder in (_PAGE, "/lib"):
+    PAGE = "/lib"
+for _folder in (PAGE, "/lib"):
     try:
         os.stat(_folder + "/busservo_web.html.gz")
-        _PAGE = _folder
+        PAGE = _folder
         break
     except OSError:
         pass
 del _folder
-_PAGE += "/busservo_web.html.gz"  # not there: serve() says so
+PAGE += "/busservo_web.html.gz"  # not there: serve() says so
 
 
 def _same(given, secret):
@@ -115,23 +146,25 @@ def _same(given, secret):
     return diff == 0 and len(secret) > 0
 
 
-class _Refused(Exception):
-    # A request the panel refuses: its status code and why.
+class Refused(Exception):
+    """A request the panel refuses: its HTTP status and why, which the page shows."""
+
     def __init__(self, status, why):
         super().__init__(why)
         self.status = status
 
 
-def _need(body, key, kind, low=None, high=None, what=None):
-    # body[key], checked: of kind (int also stands for float), in low..high.
+def need(body, key, kind, low=None, high=None, what=None):
+    """body[key], checked: of kind (int also stands for float), in low..high; else
+    Refused(400) naming what (default: key), the range and what came."""
     value = body.get(key)
     what = what or key
     ok = type(value) is kind or (kind is float and type(value) is int)
     if not ok or (kind is float and not -1e9 < value < 1e9):  # NaN fails this too
         kind = "number" if kind is float else kind.__name__
-        raise _Refused(400, "%s must be a %s, got %r" % (what, kind, value))
+        raise Refused(400, "%s must be a %s, got %r" % (what, kind, value))
     if low is not None and not low <= value <= high:
-        raise _Refused(400, "%s must be in %s..%s, got %r" % (what, low, high, value))
+        raise Refused(400, "%s must be in %s..%s, got %r" % (what, low, high, value))
     return value
 
 
@@ -144,6 +177,8 @@ _STATUS = {
     404: b"404 Not Found",
     409: b"409 Conflict",
     413: b"413 Payload Too Large",
+    415: b"415 Unsupported Media Type",
+    429: b"429 Too Many Requests",
     500: b"500 Internal Server Error",
     503: b"503 Service Unavailable",
     504: b"504 Gateway Timeout",
@@ -164,21 +199,6 @@ _FAILED = (
     b'\r\n\r\n{"error": "the panel could not answer (out of memory?): try again"}'
 )
 _EMPTY = b"HTTP/1.0 204 No Content\r\n\r\n"
-_POSITIONS = 21  # busservo.CMD_MULT_SERVO_POS_READ: a reply of positions
-
-
-def _name(body):
-    # A sequence's name, safe as a file name under _FOLDER.
-    name = body.get("name")
-    if (
-        type(name) is not str
-        or not 1 <= len(name) <= _NAME_MAX
-        or not all(c in _NAME_CHARS for c in name)
-    ):
-        raise _Refused(
-            400, "name must be 1..%d letters, digits, - or _, got %r" % (_NAME_MAX, name)
-        )
-    return _FOLDER + "/" + name + ".json"
 
 
 class _Conn:
@@ -193,6 +213,14 @@ class _Conn:
         self._left = _REQUEST
         self.heard = False  # a byte has come
         self.sent = False  # a write has gone out whole: the status line first
+
+    def client(self):
+        # Who is asking: the address the connection came from (its port left out).
+        try:
+            peer = self._writer.get_extra_info("peername")
+        except Exception:
+            return None
+        return peer[0] if type(peer) is tuple else bytes(peer[4:8])  # (ip, port), or sockaddr_in
 
     async def _more(self):
         data = await self._reader.read(256)
@@ -224,12 +252,14 @@ class _Conn:
 
 
 async def _request(conn):
-    # (method, path, the Authorization header's value, the body) of the request on conn.
-    # A malformed one raises ValueError (a 400); a body over _BODY, _Refused (413).
+    # (method, path, the Authorization header's value, the body, whether the body is JSON by
+    # its Content-Type) of the request on conn. A malformed one raises ValueError (a 400); a
+    # body over _BODY, Refused (413).
     method, path, _ = (await conn.readline()).decode().split()
     path = path.partition("?")[0]
     auth = ""
     length = 0
+    is_json = False
     while True:
         line = (await conn.readline()).strip()
         if not line:
@@ -244,6 +274,8 @@ async def _request(conn):
                 raise ValueError("Content-Length %d" % length)
         elif name == b"authorization":
             auth = value.strip().decode()
+        elif name == b"content-type":
+            is_json = value.strip().lower().startswith(b"application/json")
     if length > _BODY:
         # Some of the body read, so that closing does not reset the connection before
         # the answer has gone; past that, the client hears a reset.
@@ -253,11 +285,11 @@ async def _request(conn):
                     break
             except asyncio.TimeoutError:
                 break
-        raise _Refused(413, "the body is over %d bytes" % _BODY)
+        raise Refused(413, "the body is over %d bytes" % _BODY)
     body = await conn.read(length) if length else b""
     if len(body) < length:
         raise ValueError("the body was cut short")
-    return method, path, auth, body
+    return method, path, auth, body, is_json
 
 
 async def _answer(conn, status, answer):
@@ -273,9 +305,9 @@ async def _answer(conn, status, answer):
     await conn.write(data)
 
 
-async def _page(conn, head):
+async def _page(conn, page, head):
     # The page, from its file a chunk at a time (head: its headers only).
-    with open(_PAGE, "rb") as f:
+    with open(page, "rb") as f:
         size = f.seek(0, 2)
         f.seek(0)
         await conn.write(
@@ -302,19 +334,11 @@ async def _close(writer):
 
 
 class Panel:
-    """The panel's state, its loop and its HTTP side, for serve(); a test may drive one
-    directly."""
+    """The panel's core: sessions and arming, STOP, the route table, the state, the loop
+    and the HTTP side, for serve(); the parts plug into it (attach(panel)). A test may
+    drive one directly."""
 
-    # The jog's and the calibration's, here until they are used (a panel without an arm
-    # keeps its instances' RAM): busservo_web_arm sets them.
-    no_arm = None  # why there is no arm to jog, if the file's links make none
-    _line = None  # a jog's busservo_arm.Line on its way
-    _jog = None  # [x, y, z, pitch] the jogs have reached, while _jogged == _orders
-    _jogged = -1
-    cal = None  # a busservo_calibrate.Calibration under way
-    _cal = None  # its news: {"step", "seen", "why", "joints"}
-
-    def __init__(self, robot, password, arm=None, path=_CALIBRATION):
+    def __init__(self, robot, password, arm=None, path=CALIBRATION, page=None, parts=PARTS):
         if type(password) is not str or len(password) < 8:
             # Why, never the password itself: the message may end up in a log or on a screen.
             got = type(password).__name__
@@ -323,51 +347,149 @@ class Panel:
             raise ValueError("password must be a str of 8 or more characters, got " + got)
         if arm is not None and arm.robot is not robot:
             raise ValueError("arm must be an Arm on robot")
+        self.arm = arm  # the program's Arm to jog, if it gave one (the jog part's)
         self.path = path  # the calibration file: an arm's links, and where a calibration goes
+        self.page = page or PAGE
         self.robot = robot
         self.bus = robot.bus
         self._ids = [robot.joints[name].servo_id for name in robot.names]
-        self.to = {}  # {name: degrees} the page or a jog last sent each joint towards
+        self.to = {}  # {name: degrees} each joint was last sent towards (the thumbs follow)
         self.robots = 1  # robots the panel has had (a calibration saved gives it another)
-        if arm is None:  # the arm its calibration file's links make, if it has links
-            try:
-                with open(path) as f:
-                    if '"links"' in f.read():
-                        arm = _arm_part().arm(self, robot)  # (busservo_arm imported then)
-            except OSError:
-                pass  # no calibration file (yet)
-        self.arm = arm
-        self._password = password.encode()
-        self._sessions = []  # [token, ticks_ms last seen], oldest first
+        self.limp = False  # joints let go by a limp or a STOP, until the next move
         self.armed = None  # the token of the page that armed, or None
-        self.sequence = bm.Sequence()
-        self.edits = 0  # changes to the sequence: the page reads it again when this grows
-        self.player = None
+        self.busy = None  # (part, why) while a part holds the joints, else None
+        self.orders = 0  # one more with each order: a read begun before one is void
+        self.read_ms = _READ_MS
         self.error = None  # the last error of the loop, for the page
         self._error_at = 0
-        self.limp = False  # joints let go by limp() or estop(), until the next move
-        self._orders = 0  # bumped by each order: a halt or an arm begun before one is void
-        self._halting = None  # the task that halts a sequence stopped mid-pose
+        self._password = password.encode()
+        self._sessions = []  # [token, ticks_ms last seen, why its arming ended], oldest first
+        self._wrong = {}  # {client: wrong passwords} since _minute (ticks_ms)
+        self._parts = []
+        self._later = {}  # {NAME: the module of a part to plug in when /api/NAME is asked for}
+        self._lazy = []  # (module, condition) of the parts not plugged in yet
+        self.parts = {}  # {module: its part}, as attach() returns it
         self._asking = asyncio.Lock()  # one query of the panel's on the bus at a time
         now = time.ticks_ms()
         self._seen = time.ticks_add(now, -_OPEN_MS)  # any page, last
+        self._minute = now
         self._read = self._battery = now
         # Connections: (task, _Conn) of the requests being read, oldest first; how many
         # requests are being answered.
         self._reading = []
         self._clients = 0
+        for part in parts:
+            self.plug(*part)
+
+    # What the parts use.
+
+    def add(self, part):
+        """Answer /api/NAME with part's get_NAME() and post_NAME(), and call its state(),
+        tick(), still() and close(), those it has (this module's header says how)."""
+        self._parts.append(part)
+
+    def plug(self, module, route=None, condition=None):
+        """Plug in the part of module (its attach(self)): now, or with route (NAME), when
+        /api/NAME is first asked for, or condition(self) holds (now, or once a calibration
+        is saved). The one way parts are loaded."""
+        if route and not (condition and condition(self)):
+            self._later[route] = module
+            if condition:
+                self._lazy.append((module, condition))
+        elif module not in self.parts:
+            self.parts[module] = __import__(module).attach(self)
+
+    def saved(self, key):
+        """True if the calibration file (path) holds key (as {"key": ...})."""
+        try:
+            with open(self.path) as f:
+                return ('"%s"' % key) in f.read()
+        except OSError:
+            return False  # no calibration file (yet)
+
+    def order(self, by=None, halt=False):
+        """A new order, from part by (None: the core): every other part stops what it drives
+        (still(halt)), and a read begun before it is void. Returns its number."""
+        self.orders += 1
+        for part in self._parts:
+            if part is not by and hasattr(part, "still"):
+                part.still(halt)
+        return self.orders
+
+    def driving(self, token, by=None):
+        """Refuse (409) unless the page of token has the panel armed and no part but by
+        holds the joints (busy: a sequence playing, a calibration under way)."""
+        if self.armed != token:
+            raise Refused(409, "arm the panel first (another page may have it armed)")
+        if self.busy and self.busy[0] is not by:
+            raise Refused(409, self.busy[1])
+
+    def pose(self, pose, what):
+        """A pose {joint: degrees}, checked: known joints, within their limits; else
+        Refused(400) naming what."""
+        if type(pose) is not dict or not pose:
+            raise Refused(400, "%s must be {joint: degrees}, got %r" % (what, pose))
+        for name in pose:
+            joint = self.robot.joints.get(name)
+            if joint is None:
+                raise Refused(400, "no joint %r: the joints are %s" % (name, self.robot.names))
+            need(pose, name, float, joint.lo, joint.hi, "%s[%r]" % (what, name))
+        return pose
+
+    async def positions(self, ids):
+        """{servo_id: position} of ids, read now without blocking: the driver's ask(), a step
+        every few ms, while the loop, the stream and the other pages go on. One such query
+        at a time; raises OSError(ETIMEDOUT) as the driver's queries do."""
+        bus = self.bus
+        async with self._asking:
+            for _ in bus.ask(ids):
+                await asyncio.sleep_ms(_ASK_MS)
+            return {i: bus.positions.get(i) for i in ids}
+
+    async def where(self, names=None):
+        """{name: degrees} of these joints (all by default), as Robot.where() gives them,
+        read as positions() reads."""
+        robot = self.robot
+        names = robot.names if names is None else names
+        got = await self.positions([robot.joints[name].servo_id for name in names])
+        return robot.where(names, got)  # what came: it does not ask again
+
+    def adopt(self, robot):
+        """Drive robot from now on (the calibration just saved): the page reads its joints
+        again."""
+        self.robot = robot
+        self._ids = [robot.joints[name].servo_id for name in robot.names]
+        self.to = {}
+        self.robots += 1
+        for module, condition in self._lazy:
+            if condition(self):
+                self.plug(module)  # what the new calibration file calls for
+
+    def failed(self, e):
+        """Show e on the page, until _ERROR_MS after it last happened."""
+        self.error = "%s: %s" % (type(e).__name__, e)
+        self._error_at = time.ticks_ms()
 
     # Sessions.
 
-    def _login(self, password):
+    def _login(self, password, client=None):
+        # The wrong passwords are counted by client, a minute at a time.
+        now = time.ticks_ms()
+        if time.ticks_diff(now, self._minute) > _WRONG_MS:
+            self._minute = now
+            self._wrong = {}
+        wrong = self._wrong
+        if wrong.get(client, 0) >= _WRONG or sum(wrong.values()) >= _WRONG_ALL:
+            wait = (_WRONG_MS - time.ticks_diff(now, self._minute)) // 1000 + 1
+            raise Refused(429, "too many wrong passwords: try again in %d s" % wait)
         if type(password) is not str or not _same(password.encode(), self._password):
+            wrong[client] = wrong.get(client, 0) + 1
             return None
         token = "".join("%02x" % b for b in os.urandom(16))
-        self._sessions.append([token, time.ticks_ms()])
-        if len(self._sessions) > _SESSIONS:
-            old = self._sessions.pop(0)
-            if old[0] == self.armed:
-                self.disarm()
+        sessions = self._sessions
+        sessions.append([token, now, None])
+        if len(sessions) > _SESSIONS:  # the oldest forgotten, but not the armed page's
+            sessions.pop(1 if sessions[0][0] == self.armed else 0)
         return token
 
     def _session(self, auth, note=True):
@@ -383,111 +505,26 @@ class Panel:
             found[1] = self._seen = time.ticks_ms()
         return found
 
-    # Reading positions without waiting on the wire.
+    # Safety: arming, the dead-man, STOP.
 
-    async def where(self, names=None):
-        """{name: degrees} of these joints (all by default), as Robot.where() gives them,
-        read now without blocking: the query is the driver's ask(), a step every few ms,
-        while the loop, the stream and the other pages go on."""
-        robot = self.robot
-        names = robot.names if names is None else names
-        ids = [robot.joints[name].servo_id for name in names]
-        async with self._asking:
-            for _ in self.bus.ask(ids):
-                await asyncio.sleep_ms(_ASK_MS)
-            return robot.where(names, self.bus.positions)  # what came: it does not ask again
-
-    # What the page can do.
-
-    def disarm(self, halt=True):
-        """Stop driving: the stream ends (the joints hold), a jog and the sequence stop, and
-        a calibration is given up (its joints stay limp)."""
+    def disarm(self, halt=True, why=None):
+        """Stop driving: every part stops what it drives (the stream holds; a sequence
+        stops, with halt where the joints are; a calibration is given up, its joints limp).
+        why: what ended it, told to the armed page (when it was not that page's doing)."""
+        if why:
+            for session in self._sessions:
+                if session[0] == self.armed:
+                    session[2] = why
         self.armed = None
-        self._still()
-        self.cal = None
-        self.stop(halt)
-
-    def _still(self):
-        # End the stream and a jog's line: each joint stops at the last target sent.
-        if self._line:
-            self._line.stop()
-            self._line = None
+        self.order(halt=halt)
         self.robot.hold()
 
-    def stop(self, halt=True):
-        """Stop the sequence; with halt, its pose on the way too (which would go on for
-        its ms): the joints it moves are sent where they are, once a read of their
-        positions has come (about 30 ms; the loop goes on meanwhile)."""
-        self._orders += 1
-        player = self.player
-        self.player = None
-        if player and not player.done:
-            player.stop()
-            if halt:
-                names = set()
-                for pose, _ in self.sequence.steps:
-                    names.update(pose)
-                self._halting = asyncio.create_task(self._halt(list(names), self._orders))
-
-    async def _halt(self, names, orders):
-        try:
-            pose = await self.where(names)
-            if self._orders == orders:  # nothing else ordered since: no stream, no limp
-                self.robot.move(pose, ms=_HALT_MS)
-        except Exception as e:  # the controller did not answer: the pose is reached
-            self._failed(e)
-
-    def estop(self):
-        self.disarm(halt=False)  # at once: the joints go limp
+    def estop(self, why=None):
+        """STOP: every joint limp, at once. why: as disarm() takes it."""
+        self.disarm(halt=False, why=why)
         self.limp = True
         self.to = {}
         self.robot.estop()
-
-    def _failed(self, e):
-        self.error = "%s: %s" % (type(e).__name__, e)
-        self._error_at = time.ticks_ms()
-
-    def _driver(self, token):
-        if self.armed != token:
-            raise _Refused(409, "arm the panel first (another page may have it armed)")
-        if self.cal:  # nothing moves but the calibration's home
-            raise _Refused(409, "a calibration is under way: finish or cancel it first")
-
-    def _pose(self, pose, what):
-        # A pose {joint: degrees}, checked: known joints, within their limits.
-        if type(pose) is not dict or not pose:
-            raise _Refused(400, "%s must be {joint: degrees}, got %r" % (what, pose))
-        for name in pose:
-            joint = self.robot.joints.get(name)
-            if joint is None:
-                raise _Refused(400, "no joint %r: the joints are %s" % (name, self.robot.names))
-            _need(pose, name, float, joint.lo, joint.hi, "%s[%r]" % (what, name))
-        return pose
-
-    def _not_playing(self):
-        if self.player:
-            raise _Refused(409, "a sequence is playing: stop it first")
-
-    def _target(self, token, targets):
-        self._driver(token)
-        self._not_playing()
-        targets = self._pose(targets, "targets")
-        self._orders += 1
-        if self._line:
-            self._still()  # the slider takes over from a jog
-        self.robot.stream(targets)
-        self.to.update(targets)
-        self.limp = False
-
-    def _play(self, token, speed, loop):
-        self._driver(token)
-        if not self.sequence.steps:
-            raise _Refused(409, "the sequence is empty: add poses first")
-        self._orders += 1
-        self._still()
-        self.to = {}
-        self.player = self.sequence.play(self.robot, speed, loop)
-        self.limp = False
 
     def state(self, token=None):
         """What the page shows; "mine": the page of token has the panel armed."""
@@ -498,9 +535,12 @@ class Panel:
             joint = robot.joints[name]
             p = positions.get(joint.servo_id)
             at.append(None if p is None else round(joint.degrees(p), 1))
-        player = self.player
         if self.error and time.ticks_diff(time.ticks_ms(), self._error_at) > _ERROR_MS:
             self.error = None  # over: it has not happened again for a while
+        lost = None
+        for session in self._sessions:
+            if session[0] == token:
+                lost = session[2]
         out = {
             "at": at,
             "to": [self.to.get(name) for name in robot.names] if self.to else None,
@@ -508,18 +548,17 @@ class Panel:
             "battery": self.bus.battery,
             "armed": self.armed is not None,
             "mine": token is not None and self.armed == token,
+            "lost": lost,
             "limp": self.limp,
-            "steps": [ms for _, ms in self.sequence.steps],
-            "edits": self.edits,
-            "playing": player.index if player else None,
             "updates": robot.updates,
             "error": self.error,
         }
-        if self.arm or self.cal:  # only then: a panel without an arm answers as before
-            _arm_part().state(self, out, at)
+        for part in self._parts:
+            if hasattr(part, "state"):
+                part.state(out, token)
         return out
 
-    # The loop: the bus's replies, the stream, the player, the dead-man and the reads.
+    # The loop: the bus's replies, the dead-man, the parts, the stream and the reads.
 
     async def run(self):
         """Run for ever (until cancelled): serve() runs it beside the web server."""
@@ -527,11 +566,11 @@ class Panel:
             try:
                 self._tick()
             except Exception as e:  # the panel must go on, and say so
-                self._failed(e)
+                self.failed(e)
                 try:
-                    self.stop()
+                    self.order(halt=True)  # a sequence stops where the joints are
                 except Exception:
-                    self.stop(halt=False)  # the bus failed: stop sending, at least
+                    self.order()  # the bus failed: stop sending, at least
             await asyncio.sleep_ms(_TICK_MS)
 
     def _tick(self):
@@ -544,23 +583,18 @@ class Panel:
             read = read or cmd == _POSITIONS
         now = time.ticks_ms()
         if self.armed is not None:
-            for token, seen in self._sessions:
+            for token, seen, _ in self._sessions:
                 if token == self.armed and time.ticks_diff(now, seen) > _DEAD_MS:
-                    self.disarm()
-            if self._line:
-                _arm_part().step(self)  # a jog: its line's next point, sent when it can be
-            self.robot.step()
-        if self.cal and read:
-            _arm_part().feel(self)  # the positions just read: the sweep's, or the nudge's
-        if self.player:
-            if self.player.done:
-                self.player = None
-            else:
-                self.player.step()
+                    self.disarm(why="held: this page was silent for over 1 s (the dead-man)")
+        for part in self._parts:
+            if hasattr(part, "tick"):
+                part.tick(read)
+        if self.armed is not None:
+            self.robot.step()  # the stream the parts fed
         if bus.wire_ms() or self._asking.locked():
-            return  # the stream, the player and a route's query come first
+            return  # the stream, a sequence and a route's query come first
         open_ = time.ticks_diff(now, self._seen) < _OPEN_MS
-        every = (_CAL_READ_MS if self.cal else _READ_MS) if open_ else _OPEN_MS
+        every = self.read_ms if open_ else _OPEN_MS
         if time.ticks_diff(now, self._read) >= every:
             self._read = now
             bus.request_positions(self._ids)
@@ -606,10 +640,10 @@ class Panel:
                 if conn.heard:
                     await conn.write(_BUSY)
                 return
-            except _Refused as e:  # too large
+            except Refused as e:  # too large
                 request = e
             except (ValueError, UnicodeError):  # malformed, cut short, or too long
-                request = _Refused(400, "bad request")
+                request = Refused(400, "bad request")
             finally:
                 if mine in reading:
                     reading.remove(mine)
@@ -641,35 +675,40 @@ class Panel:
         try:
             if type(request) is not tuple:
                 raise request  # refused as it was read
-            method, path, auth, body = request
+            method, path, auth, body, is_json = request
             if path == "/" and method in ("GET", "HEAD"):
-                await _page(conn, method == "HEAD")
+                await _page(conn, self.page, method == "HEAD")
                 return
             if path == "/favicon.ico" and method == "GET":
                 await _answer(conn, 204, None)  # no icon: nothing to log in for
                 return
             name = path[5:] if path.startswith("/api/") else ""
             if name == "login" and method == "POST":
-                answer = await self._post_login(body)
+                answer = await self._post_login(body, is_json, conn.client())
             else:
                 session = self._session(auth)
                 if session is None:
-                    raise _Refused(401, "log in first")
+                    raise Refused(401, "log in first")
                 handler = None
                 if name.isalpha() and method in ("GET", "POST"):
-                    handler = getattr(self, "_%s_%s" % (method.lower(), name), None)
+                    if name in self._later:  # a part plugged in when first asked for
+                        self.plug(self._later.pop(name))
+                    attr = "%s_%s" % (method.lower(), name)
+                    handler = getattr(self, "_" + attr, None)  # the core's own
+                    for part in self._parts:
+                        handler = handler or getattr(part, attr, None)
                 if handler is None:
-                    raise _Refused(404, "no such page")
+                    raise Refused(404, "no such page")
                 if method == "POST":
                     try:
                         body = json.loads(body) if body else {}
                     except ValueError:
-                        raise _Refused(400, "the body is not JSON")
+                        raise Refused(400, "the body is not JSON")
                     if type(body) is not dict:
-                        raise _Refused(400, "the body must be a JSON object, got %r" % (body,))
+                        raise Refused(400, "the body must be a JSON object, got %r" % (body,))
                 answer = await handler(body, session[0])
             status = 200
-        except _Refused as e:
+        except Refused as e:
             status, answer = e.status, {"error": e.args[0]}
         except (ValueError, TypeError) as e:  # the motion layer's checks
             status, answer = 400, {"error": str(e)}
@@ -677,19 +716,21 @@ class Panel:
             status, answer = 504, {"error": "the controller: %r" % (e,)}
         await _answer(conn, status, answer)
 
-    # The routes: _METHOD_NAME(body, token) for /api/NAME. A GET's body is not read.
+    # The core's routes.
 
-    async def _post_login(self, body):
+    async def _post_login(self, body, is_json, client):
+        if not is_json:
+            raise Refused(415, "send the password as JSON (Content-Type: application/json)")
         try:
             body = json.loads(body)
         except ValueError:
             body = None
         if type(body) is not dict:
-            raise _Refused(400, 'the body must be {"password": "..."}')
-        token = self._login(body.get("password"))
+            raise Refused(400, 'the body must be {"password": "..."}')
+        token = self._login(body.get("password"), client)
         if token is None:
             await asyncio.sleep_ms(500)  # a guess costs time
-            raise _Refused(401, "wrong password")
+            raise Refused(401, "wrong password")
         return {"token": token}
 
     async def _get_joints(self, body, token):
@@ -699,155 +740,42 @@ class Panel:
     async def _get_state(self, body, token):
         return self.state(token)
 
-    async def _get_steps(self, body, token):
-        return [{"pose": pose, "ms": ms} for pose, ms in self.sequence.steps]
-
     async def _post_arm(self, body, token):
-        if _need(body, "on", bool):
+        if need(body, "on", bool):
             if self.armed not in (None, token):
-                raise _Refused(409, "another page has the panel armed")
-            orders = self._orders
+                raise Refused(409, "another page has the panel armed")
+            orders = self.orders
             self.robot.hold()  # arming moves nothing: targets come from the page
             await self.where()  # where the joints are (a joint with a dps limit needs it)
-            if self._orders != orders or self.armed not in (None, token):
-                raise _Refused(409, "stopped, or armed elsewhere, while arming: arm again")
+            if self.orders != orders or self.armed not in (None, token):
+                raise Refused(409, "stopped, or armed elsewhere, while arming: arm again")
             self.armed = token
+            for session in self._sessions:
+                if session[0] == token:
+                    session[2] = None  # armed again: what ended it before is over
         elif self.armed == token:
             self.disarm()
         return self.state(token)
 
-    async def _post_target(self, body, token):
-        self._target(token, body.get("targets"))
-        return {}
-
     async def _post_estop(self, body, token):
-        self.estop()
+        self.estop(None if self.armed == token else "another page pressed STOP")
         return self.state(token)
 
-    async def _post_limp(self, body, token):
-        self.disarm(halt=False)  # limp stops every joint, even with no controller
-        self.robot.limp()
-        self.limp = True
-        self.to = {}
-        return self.state(token)
 
-    async def _post_capture(self, body, token):
-        return {"pose": await self.where()}
-
-    async def _post_add(self, body, token):
-        # The pose given (the one the page showed, maybe edited), else the one read now.
-        ms = _MS_DEFAULT if body.get("ms") is None else _need(body, "ms", int, 0, 65535)
-        pose = body.get("pose")
-        pose = await self.where() if pose is None else self._pose(pose, "pose")
-        self.sequence.append(pose, ms)
-        self.edits += 1
-        return self.state(token)
-
-    def _step(self, body):
-        # The index of a step of the sequence, checked; none while it plays.
-        steps = self.sequence.steps
-        if not steps:
-            raise _Refused(409, "the sequence is empty")
-        self._not_playing()
-        return _need(body, "index", int, 0, len(steps) - 1)
-
-    async def _post_edit(self, body, token):
-        i = self._step(body)
-        pose, ms = self.sequence.steps[i]
-        if body.get("pose") is not None:
-            pose = dict(self._pose(body["pose"], "pose"))
-        if body.get("ms") is not None:
-            ms = _need(body, "ms", int, 0, 65535)
-        self.sequence.steps[i] = (pose, ms)
-        self.edits += 1
-        return self.state(token)
-
-    async def _post_remove(self, body, token):
-        self.sequence.steps.pop(self._step(body))
-        self.edits += 1
-        return self.state(token)
-
-    async def _post_clear(self, body, token):
-        self._not_playing()
-        self.sequence = bm.Sequence()
-        self.edits += 1
-        return self.state(token)
-
-    async def _post_play(self, body, token):
-        speed = 1.0 if body.get("speed") is None else _need(body, "speed", float, 0.1, 10)
-        self._play(token, speed, bool(body.get("loop")))
-        return self.state(token)
-
-    async def _post_stop(self, body, token):
-        self.stop()
-        return self.state(token)
-
-    async def _get_sequences(self, body, token):
-        try:
-            names = os.listdir(_FOLDER)
-        except OSError:
-            names = []
-        return sorted(n[:-5] for n in names if n.endswith(".json"))
-
-    async def _post_save(self, body, token):
-        path = _name(body)
-        if not self.sequence.steps:
-            raise _Refused(409, "the sequence is empty: add poses first")
-        try:
-            os.mkdir(_FOLDER)
-        except OSError:
-            pass  # it is there
-        try:
-            self.sequence.save(path)
-        except OSError as e:  # the board's filesystem, not the controller
-            raise _Refused(500, "could not save %s: %r" % (path, e))
-        return {}
-
-    async def _post_load(self, body, token):
-        path = _name(body)
-        self._not_playing()
-        try:
-            sequence = bm.Sequence.load(path)
-        except OSError:
-            raise _Refused(404, "no sequence %r" % body["name"])
-        except (ValueError, KeyError, TypeError) as e:
-            raise _Refused(400, "%s is not a sequence: %s" % (path, e))
-        for pose, _ in sequence.steps:
-            for name in pose:
-                if name not in self.robot.joints:
-                    raise _Refused(
-                        400, "%s moves joint %r, which this robot has not" % (path, name)
-                    )
-        self.sequence = sequence
-        self.edits += 1
-        return self.state(token)
-
-    # The arm's routes, in busservo_web_arm (imported then): POST /api/jog, /api/calibrate.
-
-    async def _post_jog(self, body, token):
-        return await _arm_part().jog(self, body, token)
-
-    async def _post_calibrate(self, body, token):
-        return await _arm_part().calibrate(self, body, token)
-
-
-def _arm_part():
-    # The jog and the calibration page: their module, imported when first used.
-    import busservo_web_arm
-
-    return busservo_web_arm
-
-
-async def serve(robot, password, port=80, arm=None, path=_CALIBRATION, host="0.0.0.0"):
-    """Serve the panel for robot on port, on every interface (or host's), until cancelled.
-    password: a str of 8 or more characters, which the page asks for. arm: a
-    busservo_arm.Arm on robot to jog (default: the one path's links make, if it has them);
-    path: the calibration file, which the calibration page writes."""
-    panel = Panel(robot, password, arm, path)
+async def serve(
+    robot, password, port=80, arm=None, path=CALIBRATION, host="0.0.0.0", parts=PARTS, page=None
+):
+    """Serve the panel for robot on port, on host's interface (default: every one), until
+    cancelled. password: a str of 8 or more characters, which the page asks for. arm: a
+    busservo_arm.Arm on robot to jog (default: the one path's links make, if it has them).
+    path: the calibration file (an arm's links, and where the calibration page saves).
+    parts: the parts to plug in, as PARTS gives them (all of them). page: the page's file
+    (default: beside this module)."""
+    panel = Panel(robot, password, arm, path, page, parts)
     try:
-        os.stat(_PAGE)
+        os.stat(panel.page)
     except OSError:
-        raise OSError(2, "the page %s is missing: install it beside busservo_web" % _PAGE)
+        raise OSError(2, "the page %s is missing: install it beside busservo_web" % panel.page)
     loop = asyncio.create_task(panel.run())
     server = None
     try:
@@ -859,5 +787,6 @@ async def serve(robot, password, port=80, arm=None, path=_CALIBRATION, host="0.0
         if server:
             server.close()
         panel.disarm()
-        if panel._halting:
-            await panel._halting  # a sequence stopped mid-pose: where the joints are
+        for part in panel._parts:
+            if hasattr(part, "close"):
+                await part.close()  # a sequence stopped mid-pose: where the joints are

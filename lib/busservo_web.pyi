@@ -1,7 +1,10 @@
 """busservo_web: a control panel for a busservo_motion.Robot, served by the board itself to a
 browser on the same Wi-Fi (or on the board's own access point), on asyncio, with a small HTTP
-server of its own. An optional module: it needs busservo, busservo_motion, and its page
-busservo_web.html.gz beside it (docs/panel.md's mip command brings them all).
+server of its own. An optional module: it needs busservo, busservo_motion, its parts
+(busservo_web_sliders, busservo_web_teach, busservo_web_jog, busservo_web_calibrate) and its
+page busservo_web.html.gz beside it (docs/panel.md's mip command brings them all). This module
+is the panel's core: HTTP and safety (sessions, arming and the dead-man, STOP, the routes, the
+state and the loop); what the page does plugs into it as parts (docs/panel.md: adding one).
 
     import asyncio, busservo_web
     asyncio.run(busservo_web.serve(robot, "a password of yours", port=80))
@@ -29,12 +32,37 @@ or the panel fails (out of memory, say) before its answer has begun; 408 when it
 second to send.
 """
 
-from typing import Any
+from typing import Any, Awaitable, Callable
 
 from busservo import BusServo
 from busservo_arm import Arm
-from busservo_calibrate import Calibration
-from busservo_motion import Player, Robot, Sequence
+from busservo_motion import Robot
+
+CALIBRATION: str
+"""The calibration file's default path, "robot.json" (busservo_board.CALIBRATION)."""
+PAGE: str
+"""The page's file: busservo_web.html.gz beside this module (else in /lib)."""
+PARTS: tuple[tuple[str, tuple[str, str] | None], ...]
+"""The parts serve() plugs in by default: (module, the route (method, name) that loads it
+when first asked for, or None: at once)."""
+
+class Refused(Exception):
+    """Refused(status, why): a request the panel refuses, its HTTP status, and why (args[0],
+    which the page shows)."""
+
+    status: int
+    args: tuple[Any, ...]
+
+def need(
+    body: dict[str, Any],
+    key: str,
+    kind: type,
+    low: float | None = None,
+    high: float | None = None,
+    what: str | None = None,
+) -> Any:
+    """body[key], checked: of kind (int also stands for float), in low..high; else
+    Refused(400) naming what (default: key), the range and what came."""
 
 async def serve(
     robot: Robot,
@@ -43,72 +71,112 @@ async def serve(
     arm: Arm | None = None,
     path: str = "robot.json",
     host: str = "0.0.0.0",
+    parts: tuple[tuple[str, tuple[str, str] | None], ...] = ...,
+    page: str | None = None,
 ) -> None:
     """Serve the panel for robot on port, on every interface (or host's: "127.0.0.1" for
     this machine alone), until cancelled. password: a str of 8 or more characters, which
     the page asks for (ValueError otherwise). arm: an Arm on robot for the page to jog (None:
     the one path's links make, if it has any). path: the calibration file
-    (busservo_board.CALIBRATION by default), which the calibration page saves."""
+    (busservo_board.CALIBRATION by default), which the calibration page saves. parts: the
+    parts to plug in (PARTS by default: all). page: the page's file (default: PAGE)."""
 
 class Panel:
-    """The panel's state, its loop and its HTTP side; serve() makes one."""
+    """The panel's core: sessions and arming, STOP, the route table, the state, the loop and
+    the HTTP side; serve() makes one, and its parts plug into it."""
 
     robot: Robot
+    """The robot driven (a calibration saved gives the panel a new one: adopt())."""
     bus: BusServo
     armed: str | None
     """The session token of the page that armed the panel, or None."""
-    sequence: Sequence
-    """The sequence the page builds and plays."""
-    edits: int
-    """How many times the sequence has changed: a page reads it again when this grows."""
-    player: Player | None
+    arm: Arm | None
+    """The Arm the program gave to jog, or None (the jog part then makes one of the links)."""
+    path: str
+    """The calibration file: the links, and where the calibration page saves."""
+    page: str
+    """The page's file."""
     error: str | None
     """The last error of the panel's loop, shown on the page until 3 s after it last
     happened."""
     limp: bool
-    """The joints were let go (limp or stop) and not moved since."""
-    arm: Arm | None
-    """The arm the page jogs, or None: no jog."""
-    no_arm: str | None
-    """Why the calibration file's links make no arm, if they make none."""
-    path: str
-    """The calibration file: the links, and where the calibration page saves."""
-    cal: Calibration | None
-    """The calibration under way on the page, or None."""
+    """The joints were let go (limp or STOP) and not moved since."""
+    busy: tuple[Any, str] | None
+    """(part, why) while a part holds the joints (a sequence playing, a calibration under
+    way): driving() refuses every other part, saying why."""
+    orders: int
+    """The number of the last order (order()): a read begun before it is void."""
+    read_ms: int
+    """How often (ms) the loop reads positions while a page is open (a part may make it
+    shorter while it needs them)."""
+    parts: dict[str, Any]
+    """{module: its part} of the parts plugged in."""
     robots: int
     """Robots the panel has had (a calibration saved gives it a new one): the page reads the
     joints again when this grows."""
     to: dict[str, float]
-    """{name: degrees} the page's slider or a jog last sent each joint towards (cleared by
-    limp, stop, a sequence and a calibration)."""
+    """{name: degrees} a slider, a jog or a home last sent each joint towards (cleared by
+    limp, STOP, a sequence and a calibration): the page's thumbs follow it."""
     def __init__(
-        self, robot: Robot, password: str, arm: Arm | None = None, path: str = "robot.json"
+        self,
+        robot: Robot,
+        password: str,
+        arm: Arm | None = None,
+        path: str = "robot.json",
+        page: str | None = None,
+        parts: tuple[tuple[str, tuple[str, str] | None], ...] = ...,
     ) -> None:
-        """arm: an Arm on robot (ValueError if on another); None: the one path's links make,
-        if any (busservo_arm is imported only then)."""
-    def disarm(self, halt: bool = True) -> None:
-        """Stop driving: the stream and a jog end (the joints hold), the sequence stops (see
-        stop(): with halt, its pose on the way too), and a calibration is given up (its
-        joints stay limp)."""
-    def stop(self, halt: bool = True) -> None:
-        """Stop the sequence; with halt, its pose on the way too: the joints it moves are
-        sent where they are, once a read of their positions has come (about 30 ms later; the
-        read does not block: see where()), unless something else was ordered meanwhile."""
+        """arm: an Arm on robot (ValueError if on another) for the jog part. parts: as
+        serve() takes them."""
+    # What the parts use.
+    def route(self, method: str, name: str, handler: Callable[[Any, str], Awaitable[Any]]) -> None:
+        """Answer method /api/name with await handler(body, token): the answer (JSON), or
+        raise Refused. A POST's body is the dict of its JSON; a GET's is not read."""
+    def add(self, part: Any) -> None:
+        """Call part's state(out, token), tick(read) and still(halt), those it has: state adds
+        its keys to the state; tick, each turn of the loop (read: positions came since the
+        last); still, when something else is ordered or the panel disarms (halt: a sequence's
+        pose on the way too)."""
+    def plug(self, module: str, route: tuple[str, str] | None = None) -> None:
+        """Plug in the part of module (module.attach(panel), which returns the part): now,
+        or with route (method, name), when that route is first asked for."""
+    def order(self, by: Any = None, halt: bool = False) -> int:
+        """A new order, from part by (None: the core): every other part's still(halt); a read
+        begun before it is void. Returns its number (orders)."""
+    def driving(self, token: str, by: Any = None) -> None:
+        """Refuse (409) unless the page of token has the panel armed and no part but by holds
+        the joints (busy)."""
+    def pose(self, pose: Any, what: str) -> dict[str, float]:
+        """A pose {joint: degrees}, checked (known joints, within their limits); else Refused
+        (400) naming what."""
+    async def positions(self, ids: list[int]) -> dict[int, int | None]:
+        """{servo_id: position} of ids, read now without blocking: the driver's
+        BusServo.ask(), a step every 5 ms, so the panel's loop, the stream and the other
+        pages go on while the reply is on its way. One such query at a time; raises
+        OSError(ETIMEDOUT) as the driver's queries do."""
     async def where(self, names: list[str] | None = None) -> dict[str, float]:
         """{name: degrees} of these joints (all by default), as Robot.where() gives them, read
-        now without blocking: the query is the driver's BusServo.ask(), a step every 5 ms, so
-        the panel's loop, the stream and the other pages go on while the reply is on its
-        way. One such query at a time; raises OSError(ETIMEDOUT) as Robot.where() does."""
-    def estop(self) -> None:
-        """Disarm and stop the sequence at once, then Robot.estop(): every joint limp."""
+        as positions() reads."""
+    def adopt(self, robot: Robot) -> None:
+        """Drive robot from now on (the calibration just saved): the page reads its joints
+        again."""
+    def failed(self, e: BaseException) -> None:
+        """Show e on the page until 3 s after it last happened."""
+    # Safety.
+    def disarm(self, halt: bool = True, why: str | None = None) -> None:
+        """Stop driving: every part stops what it drives (the stream holds; a sequence stops,
+        with halt where the joints are; a calibration is given up, its joints limp). why:
+        what ended it, told to the armed page (the state's "lost")."""
+    def estop(self, why: str | None = None) -> None:
+        """Disarm at once, then Robot.estop(): every joint limp. why: as disarm() takes it."""
     def state(self, token: str | None = None) -> dict[str, Any]:
         """What GET /api/state answers: positions in degrees ("at") and the targets sent
-        ("to"), battery, armed (and "mine": armed by token's page), the sequence's times and
-        how many times it changed; with an arm, its tool point (x, y, z, pitch) and the jog's
-        target; a calibration's step, what it has seen, and what it refuses by joint."""
+        ("to"), battery, armed (and "mine": armed by token's page; "lost": why its arming
+        ended, if something else ended it), limp, the loop's error, and what each part
+        adds (the sequence's steps, the jog's arm and tool point, a calibration's step)."""
     async def handle_request(self, reader: Any, writer: Any) -> None:
         """Answer one connection's request (HTTP/1.0), then close it: serve()'s server calls
         this for each connection."""
     async def run(self) -> None:
-        """The panel's loop, for ever: the bus's replies, the stream, the player, the
-        dead-man, and position and battery requests."""
+        """The panel's loop, for ever: the bus's replies, the dead-man, the parts' ticks, the
+        stream, and position and battery requests."""

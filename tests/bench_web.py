@@ -243,7 +243,7 @@ def stall(seconds, pages=True, use=None):
                 world.sim.turn(i, 300 + (k * 37 + i * 101) % 400)
             await http(port, "GET", "/api/state", token=token)
             await asyncio.sleep_ms(150)
-        worst[2] = panel[0].cal.samples
+        worst[2] = panel[0].parts["busservo_web_calibrate"].cal.samples
 
     panel = []
     new = busservo_web.Panel.__init__

@@ -779,7 +779,11 @@ class CommandLine(Scratch):
             with urlopen(url + "/", timeout=10) as page:
                 self.assertEqual(page.headers["Content-Encoding"], "gzip")
                 self.assertEqual(page.read(2), b"\x1f\x8b")
-            login = Request(url + "/api/login", json.dumps({"password": "a password!"}).encode())
+            login = Request(
+                url + "/api/login",
+                json.dumps({"password": "a password!"}).encode(),
+                {"Content-Type": "application/json"},
+            )
             with urlopen(login, timeout=10) as answer:
                 self.assertEqual(len(json.load(answer)["token"]), 32)
         finally:
@@ -1004,7 +1008,7 @@ class Install(Scratch):
                 bin_ + "/python",
                 "-c",
                 "import busservo_web, os; print(os.path.exists("
-                "busservo_web._PAGE), busservo_web.__file__)",
+                "busservo_web.PAGE), busservo_web.__file__)",
             ],
             capture_output=True,
             text=True,

@@ -80,12 +80,15 @@ class MipWeb(unittest.TestCase):
                     "busservo_motion.mpy",
                     "busservo_web.html.gz",
                     "busservo_web.mpy",
-                    "busservo_web_arm.mpy",  # its jog and calibration page
+                    "busservo_web_calibrate.mpy",  # its parts
+                    "busservo_web_jog.mpy",
+                    "busservo_web_sliders.mpy",
+                    "busservo_web_teach.mpy",
                 ],
             )
             use = (
                 "import busservo_web, os;"
-                "print(busservo_web.__file__, os.stat(busservo_web._PAGE)[6])"
+                "print(busservo_web.__file__, os.stat(busservo_web.PAGE)[6])"
             )
             ok, out = sh("MICROPYPATH=.frozen:%s %s -c '%s'" % (target, MICROPYTHON, use))
             self.assertTrue(ok, out)
@@ -383,7 +386,10 @@ class Manifest(unittest.TestCase):
                 "lib/busservo_board.py",
                 "lib/busservo_motion.py",
                 "lib/busservo_web.py",
-                "lib/busservo_web_arm.py",  # its jog and calibration page
+                "lib/busservo_web_sliders.py",  # its parts
+                "lib/busservo_web_teach.py",
+                "lib/busservo_web_jog.py",
+                "lib/busservo_web_calibrate.py",
             ],
         )
         named, meta = self.run_manifest(arm=True, calibration=True)  # both on the motion layer

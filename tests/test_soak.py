@@ -58,6 +58,9 @@ class _Written:
     async def write(self, data):
         self.out += data
 
+    def client(self):
+        return None  # who asks: the page, the only client
+
 
 class _Lock:
     # asyncio.Lock on the _Board: one holder; another waits a ms at a time.
@@ -190,7 +193,7 @@ class Soak:
         auth = "Bearer " + self.token if self.token else ""
         data = json.dumps(body).encode() if body is not None else b""
         conn = _Written()
-        await self.panel._dispatch(conn, (method, path, auth, data))
+        await self.panel._dispatch(conn, (method, path, auth, data, True))
         head, _, answer = conn.out.partition(b"\r\n\r\n")
         if self.leak and path == "/api/state":  # a list in the panel, one more item a poll
             if not hasattr(self.panel, "_leaked"):
@@ -247,7 +250,7 @@ class Soak:
         status, state = await self.request("POST", "/api/play", {"loop": True})
         assert status == 200 and state["playing"] is not None, (status, state)
         counts["plays"] += 1
-        player = self.panel.player
+        player = self.panel.parts["busservo_web_teach"].player
         await sleep_ms(3000)
         counts["loops"] += player.loops
         if m % 60 == 0 and m:

@@ -35,6 +35,10 @@ UNSTUBBED = {
     # BusServo.ask() is the step-by-step query AsyncBusServo runs under its lock; run on the
     # AsyncBusServo it would go around the lock, and its reply past the waiting tasks.
     "busservo_async.AsyncBusServo.ask",
+    # What MicroPython's exceptions carry besides args (an OSError's errno, StopIteration's
+    # value): not the panel's Refused's to say.
+    "busservo_web.Refused.errno",
+    "busservo_web.Refused.value",
 }
 
 
@@ -60,6 +64,7 @@ def instances():
         "Arm": arm,
         "Line": arm.line_to(120, 0, 50),
         "Calibration": busservo_calibrate.Calibration(bus, {"base": 1}),
+        "Refused": busservo_web.Refused(409, "why"),
     }
 
 

@@ -13,6 +13,7 @@ import deflate
 import busservo
 import busservo_motion as bm
 import busservo_web
+import busservo_web_teach
 import web_world
 import wire
 from busservo import (
@@ -91,12 +92,12 @@ def away(scenario):
     which another run of the tests may be using at the same time."""
     folder = scratch("web")
     os.mkdir(folder)
-    kept = busservo_web._FOLDER
-    busservo_web._FOLDER = folder + "/sequences"
+    kept = busservo_web_teach.FOLDER
+    busservo_web_teach.FOLDER = folder + "/sequences"
     try:
         run(scenario)
     finally:
-        busservo_web._FOLDER = kept
+        busservo_web_teach.FOLDER = kept
         sh("rm -rf " + folder)
 
 
@@ -246,8 +247,11 @@ class Package(Tidy):
                 "mpy/busservo_motion.mpy",
                 "mpy/busservo_arm.mpy",  # the panel's jog, imported only with an arm's links
                 "mpy/busservo_calibrate.mpy",  # its calibration page, imported only then
-                "mpy/busservo_web.mpy",
-                "mpy/busservo_web_arm.mpy",  # the panel's jog and calibration, imported then
+                "mpy/busservo_web.mpy",  # the core, and its parts:
+                "mpy/busservo_web_sliders.mpy",
+                "mpy/busservo_web_teach.mpy",
+                "mpy/busservo_web_jog.mpy",
+                "mpy/busservo_web_calibrate.mpy",  # imported when first used
             ],
         )
         self.assertEqual(package.get("deps", []), [])  # nothing from elsewhere
@@ -430,7 +434,7 @@ class BadInput(Tidy):
     def test_remove_past_the_last_step_or_play_over_10x_gets_400_and_changes_nothing(self):
         async def scenario(port, world, robot):
             token = await login(port)
-            _panels[-1].sequence.append({"base": 10}, 300)  # a step, with no read
+            teach(_panels[-1]).sequence.append({"base": 10}, 300)  # a step, with no read
             status, reply = await http(port, "POST", "/api/remove", {"index": 1}, token)
             self.assertEqual(status, 400, reply)
             self.assertEqual(reply["error"], "index must be in 0..0, got 1")
@@ -751,9 +755,9 @@ class Driving(Tidy):
         async def scenario(port, world, robot):
             token = await armed(port)
             await http(port, "POST", "/api/limp", {}, token)  # all four let go
-            os.mkdir(busservo_web._FOLDER)
+            os.mkdir(busservo_web_teach.FOLDER)
             bm.Sequence([({"base": -40}, 300), ({"base": 40}, 20000)]).save(
-                busservo_web._FOLDER + "/base_only.json"
+                busservo_web_teach.FOLDER + "/base_only.json"
             )
             status, reply = await http(port, "POST", "/api/load", {"name": "base_only"}, token)
             self.assertEqual(status, 200, reply)
@@ -1038,7 +1042,25 @@ def busservo_web_armed(robot):
 
 
 def busservo_web_playing(robot):
-    return _panels[-1].player if _panels else None
+    return teach(_panels[-1]).player if _panels else None
+
+
+def teach(panel):
+    return panel.parts["busservo_web_teach"]
+
+
+def sliders(panel):
+    return panel.parts["busservo_web_sliders"]
+
+
+def jog(panel):
+    return panel.parts["busservo_web_jog"]
+
+
+def calibrating(panel):
+    # The calibration under way, if any (its part is plugged in when first used).
+    part = panel.parts.get("busservo_web_calibrate")
+    return part and part.cal
 
 
 # The last panel serve() made, seen by the tests through Panel's own state (the last
@@ -1176,13 +1198,13 @@ class AlwaysAnswers(Tidy):
             async def stall(body, token):
                 await asyncio.sleep_ms(5000)
 
-            panel._get_state = stall
+            panel.route("GET", "state", stall)
             request = b"GET /api/state HTTP/1.0\r\nAuthorization: Bearer %s\r\n\r\n"
             reader, writer = await asyncio.open_connection("127.0.0.1", port)
             line, ms = await answered(reader, writer, request % token.encode())
             self.assertEqual(line, b"HTTP/1.0 503 Service Unavailable\r\n", ms)
             self.assertEqual(panel._clients, 0)
-            del panel._get_state
+            panel.route("GET", "state", panel._get_state)
             status, _ = await http(port, "GET", "/api/state", token=token)
             self.assertEqual(status, 200)
 
@@ -1328,21 +1350,21 @@ class Loop(Tidy):
 
     def test_a_sequence_that_has_ended_lets_the_sliders_drive_again(self):
         w, panel, token = self.panel()
-        panel.sequence.append({"base": 10}, 100)
-        panel._play(token, 1.0, False)
+        teach(panel).sequence.append({"base": 10}, 100)
+        teach(panel).play(token, 1.0, False)
         self.tick(w, panel, token, 300)
         self.assertEqual(panel.state(token)["playing"], None)
-        panel._target(token, {"base": 20})  # not 409: "a sequence is playing"
+        sliders(panel).target(token, {"base": 20})  # not 409: "a sequence is playing"
         self.tick(w, panel, token, 500)  # the stream's first frame glides for its pace
         self.assertEqual(w.sim.position(1), panel.robot.joints["base"].position(20))
 
     def test_a_slider_drag_during_playback_is_refused_and_sends_nothing(self):
         w, panel, token = self.panel()
-        panel.sequence.append({"base": 10}, 2000)
-        panel._play(token, 1.0, False)
+        teach(panel).sequence.append({"base": 10}, 2000)
+        teach(panel).play(token, 1.0, False)
         self.tick(w, panel, token, 100)
-        with self.assertRaises(busservo_web._Refused):
-            panel._target(token, {"base": -30})
+        with self.assertRaises(busservo_web.Refused):
+            sliders(panel).target(token, {"base": -30})
         self.tick(w, panel, token, 200)
         self.assertEqual(panel.robot.updates, 0)  # the stream sent no frame
 
@@ -1350,7 +1372,7 @@ class Loop(Tidy):
         # The base at 30 degrees/s streams towards 90 for 3 s. The page goes silent: on
         # the tick that disarms, and after it, no frame of the stream goes.
         w, panel, token = self.panel(dps=30)
-        panel._target(token, {"base": 90})
+        sliders(panel).target(token, {"base": 90})
         self.tick(w, panel, token, 500)
         self.assertTrue(panel.robot.updates > 10)  # a frame each time the servo is there
         for _ in range(150):
@@ -1365,19 +1387,19 @@ class Loop(Tidy):
 
     def test_estop_mid_sequence_lets_every_joint_go_when_the_controller_does_not_answer(self):
         w, panel, token = self.panel()
-        panel.sequence.append({"base": 40}, 20000)
-        panel._play(token, 1.0, False)
+        teach(panel).sequence.append({"base": 40}, 20000)
+        teach(panel).play(token, 1.0, False)
         self.tick(w, panel, token, 200)
         w.sim.silent = True  # it obeys, but answers no query: the stop must not read first
         panel.estop()
         self.tick(w, panel, token, 50)
         self.assertEqual(w.sim.limp, {1, 2, 3, 4})
-        self.assertEqual((panel.player, panel.armed, panel.limp), (None, None, True))
+        self.assertEqual((teach(panel).player, panel.armed, panel.limp), (None, None, True))
 
     def test_a_failure_in_the_loop_stops_the_sequence_and_is_shown(self):
         w, panel, token = self.panel()
-        panel.sequence.append({"base": 40}, 20000)
-        panel._play(token, 1.0, False)
+        teach(panel).sequence.append({"base": 40}, 20000)
+        teach(panel).play(token, 1.0, False)
         self.tick(w, panel, token, 200)
         w.uart.fail("any", OSError(5))  # the next tick's poll() raises
 
@@ -1390,25 +1412,25 @@ class Loop(Tidy):
             task = asyncio.create_task(panel.run())
             await asyncio.sleep_ms(0)  # one tick: it fails, and the panel goes on
             task.cancel()
-            await panel._halting  # the halt: where the joints are read, then sent there
+            await teach(panel).halting  # the halt: where the joints are read, then sent there
 
         busservo_web.asyncio = OnTheWorldsClock
         try:
             asyncio.run(main())
         finally:
             busservo_web.asyncio = asyncio
-        self.assertEqual(panel.player, None)
+        self.assertEqual(teach(panel).player, None)
         self.assertIn("OSError", panel.error)
         self.tick(w, panel, token, 50)
         halt = [f for f in w.frames() if f[3] == CMD_SERVO_MOVE][-1]
-        self.assertEqual(halt[5] | halt[6] << 8, busservo_web._HALT_MS)
+        self.assertEqual(halt[5] | halt[6] << 8, busservo_web_teach.HALT_MS)
 
     def test_no_position_read_goes_out_while_a_drag_streams(self):
         # The stream comes first: the panel reads positions only when the wire is free.
         w, panel, token = self.panel()
         before = len(w.frames())
         for i in range(100):  # a drag for 1 s: a new target every tick
-            panel._target(token, {"base": i % 40})
+            sliders(panel).target(token, {"base": i % 40})
             self.tick(w, panel, token, 10)
         during = [f[3] for f in w.frames()[before:]]
         self.assertTrue(panel.robot.updates > 80, panel.robot.updates)
@@ -1434,14 +1456,15 @@ def arm_robot(world):
     )
 
 
-def on_arm(scenario, links=LINKS):
-    """Run scenario(port, world, robot, path) against a panel on arm_robot(), its calibration
-    file path (with links, if given) in a scratch folder, made and removed here."""
+def on_arm(scenario, links=LINKS, robot_of=arm_robot):
+    """Run scenario(port, world, robot, path) against a panel on arm_robot() (or robot_of's
+    robot), its calibration file path (with links, if given) in a scratch folder, made and
+    removed here."""
     folder = scratch("web-arm")
     os.mkdir(folder)
     path = folder + "/robot.json"
     world = web_world.live()
-    robot = arm_robot(world)
+    robot = robot_of(world)
     if links:
         robot.save(path, links=links)
     port = free_port()
@@ -1563,7 +1586,7 @@ class Jog(Tidy):
             sent = robot.updates
             await asyncio.sleep_ms(300)
             self.assertEqual(robot.updates, sent)
-            self.assertEqual(_panels[-1]._line, None)
+            self.assertEqual(jog(_panels[-1]).line, None)
             # Armed again, a jog; STOP mid-way: every joint limp, no frame after.
             token = await armed(port)
             await http(port, "POST", "/api/jog", {"axis": "y", "by": -60}, token)
@@ -1590,9 +1613,10 @@ def hands(world, k, only=(1, 2, 3, 4)):
         world.sim.turn(i, HANDS[i][k])
 
 
-async def calibrate(port, world, token, until_step="check", still=()):
+async def calibrate(port, world, token, until_step="check", still=(), unnudged=()):
     """The calibration page's steps, done by the person's hands, to until_step; the servos
-    in still are not moved in the sweep. The last answer: (status, reply)."""
+    in still are not moved in the sweep (then the answer to "Ranges done" is the last), those
+    in unnudged not nudged. The last answer: (status, reply)."""
     ask = lambda body: http(port, "POST", "/api/calibrate", body, token)  # noqa: E731
     reply = await ask({"step": "start"})
     assert reply[0] == 200, reply
@@ -1606,8 +1630,10 @@ async def calibrate(port, world, token, until_step="check", still=()):
         hands(world, k, moving)
         await polled(port, token, 400)
     reply = await ask({"step": "nudge"})
+    if still:
+        return reply
     assert reply[0] == 200, reply
-    hands(world, 3)
+    hands(world, 3, [i for i in (1, 2, 3, 4) if i not in unnudged])
     await polled(port, token, 400)
     return await ask({"step": until_step})
 
@@ -1691,14 +1717,34 @@ class Calibrating(Tidy):
 
         on_arm(scenario)
 
+    def test_ranges_done_before_a_joint_was_swept_is_refused_naming_it(self):
+        # Once, "Ranges done" was taken with a range of 0: the sweep is not over until each
+        # joint has been moved through a range it can be calibrated on.
+        async def scenario(port, world, robot, path):
+            token = await armed(port)
+            status, reply = await calibrate(port, world, token, still=(3,))
+            self.assertEqual(status, 409, reply)
+            self.assertIn("sweep each joint first: elbow: did not move", reply["error"])
+            status, reply = await http(port, "GET", "/api/state", token=token)
+            self.assertEqual(list(reply["cal"]["why"]), ["elbow"])
+            self.assertEqual(reply["cal"]["step"], "sweep")  # the sweep goes on
+            hands(world, 1, [3])
+            await polled(port, token, 400)
+            hands(world, 2, [3])
+            await polled(port, token, 400)
+            status, reply = await http(port, "POST", "/api/calibrate", {"step": "nudge"}, token)
+            self.assertEqual((status, reply["cal"]["step"]), (200, "nudge"), reply)
+
+        on_arm(scenario)
+
     def test_a_calibration_it_cannot_trust_is_refused_naming_the_joint_and_saves_nothing(self):
         async def scenario(port, world, robot, path):
             token = await armed(port)
             with open(path) as f:
                 before = f.read()
-            status, reply = await calibrate(port, world, token, still=(3,))
+            status, reply = await calibrate(port, world, token, unnudged=(3,))
             self.assertEqual(status, 409, reply)
-            self.assertIn("cannot calibrate elbow: did not move", reply["error"])
+            self.assertIn("cannot calibrate elbow: nudged 0.0 degrees", reply["error"])
             status, reply = await http(port, "GET", "/api/state", token=token)
             self.assertEqual(list(reply["cal"]["why"]), ["elbow"])
             self.assertEqual(reply["cal"]["step"], "nudge")  # nudge again, or start over
@@ -1716,7 +1762,7 @@ class Calibrating(Tidy):
             token = await armed(port)
             await http(port, "POST", "/api/calibrate", {"step": "start"}, token)
             self.assertTrue(await until(lambda: busservo_web_armed(robot) is False, 1500))
-            self.assertEqual(_panels[-1].cal, None)
+            self.assertEqual(calibrating(_panels[-1]), None)
             token = await armed(port)
             await http(port, "POST", "/api/calibrate", {"step": "start"}, token)
             status, reply = await http(port, "POST", "/api/estop", {}, token)
@@ -1743,16 +1789,237 @@ class Calibrating(Tidy):
         on_arm(scenario)
 
 
+class WhatAUserMet(Tidy):
+    # The panel's side of what a user met in the browser, and the safety paths no test
+    # guarded (each was changed, and the suite still passed).
+
+    def test_a_login_not_sent_as_json_gets_415(self):
+        # Another site's page can send a guess from a visitor's browser as text/plain (a
+        # "simple" request); it cannot send application/json without asking first.
+        async def scenario(port, world, robot):
+            body = b'{"password": "secret-pw"}'
+            for kind in (b"Content-Type: text/plain\r\n", b""):
+                raw = b"POST /api/login HTTP/1.0\r\n%sContent-Length: %d\r\n\r\n%s" % (
+                    kind,
+                    len(body),
+                    body,
+                )
+                self.assertEqual((await send(port, raw))[:13], b"HTTP/1.0 415 ", kind)
+            await login(port)  # as JSON: as the page sends it
+
+        run(scenario)
+
+    def test_wrong_passwords_past_10_a_minute_get_429(self):
+        async def scenario(port, world, robot):
+            for _ in range(5):  # two at a time: each costs half a second
+                guesses = [
+                    asyncio.create_task(http(port, "POST", "/api/login", {"password": "x" * 9}))
+                    for _ in range(2)
+                ]
+                for guess in guesses:
+                    self.assertEqual((await guess)[0], 401)
+            for password in ("x" * 9, PASSWORD):  # this client, for the rest of the minute
+                status, reply = await http(port, "POST", "/api/login", {"password": password})
+                self.assertEqual(status, 429, reply)
+                self.assertIn("too many wrong passwords: try again in", reply["error"])
+
+        run(scenario)
+
+    def test_wrong_passwords_are_limited_by_client_and_all_together(self):
+        w = wire.World("rp2")
+        busservo_web.time = w.clock
+        try:
+            panel = busservo_web.Panel(web_world.robot(w), PASSWORD)
+            for _ in range(10):
+                self.assertIsNone(panel._login("wrong-pw", "a"))
+            with self.assertRaises(busservo_web.Refused):
+                panel._login(PASSWORD, "a")
+            self.assertTrue(panel._login(PASSWORD, "b"))  # another client: not held
+            for i in range(20):
+                self.assertIsNone(panel._login("wrong-pw", "c%d" % i))
+            with self.assertRaises(busservo_web.Refused):  # 30 in the minute, from all
+                panel._login(PASSWORD, "d")
+            w.clock.advance_ms(60001)
+            self.assertTrue(panel._login(PASSWORD, "a"))
+        finally:
+            busservo_web.time = time
+
+    def test_the_armed_page_is_never_the_one_forgotten_for_newer_logins(self):
+        async def scenario(port, world, robot):
+            token = await armed(port)
+            others = []
+            for _ in range(4):
+                others.append(await login(port))
+            reply = await state(port, token)
+            self.assertEqual((reply["armed"], reply["mine"]), (True, True))
+            status, _ = await http(port, "GET", "/api/state", token=others[0])
+            self.assertEqual(status, 401)  # the oldest of the others
+
+        run(scenario)
+
+    def test_a_page_is_told_why_its_arming_ended(self):
+        async def scenario(port, world, robot):
+            token = await armed(port)
+            self.assertEqual((await state(port, token))["lost"], None)
+            other = await login(port)
+            await http(port, "POST", "/api/estop", {}, other)
+            reply = await state(port, token)
+            self.assertEqual((reply["mine"], reply["lost"]), (False, "another page pressed STOP"))
+            self.assertEqual((await state(port, other))["lost"], None)
+            await http(port, "POST", "/api/arm", {"on": True}, token)
+            self.assertEqual((await state(port, token))["lost"], None)  # armed again
+            await http(port, "POST", "/api/limp", {}, other)
+            self.assertEqual(
+                (await state(port, token))["lost"], "another page made every joint limp"
+            )
+            await http(port, "POST", "/api/arm", {"on": True}, token)
+            for _ in range(8):  # the other page polls; this one is silent
+                await http(port, "GET", "/api/state", token=other)
+                await asyncio.sleep_ms(200)
+            self.assertIn("dead-man", (await state(port, token))["lost"])
+            await http(port, "POST", "/api/arm", {"on": True}, token)
+            await http(port, "POST", "/api/arm", {"on": False}, token)  # its own doing
+            self.assertEqual((await state(port, token))["lost"], None)
+
+        run(scenario)
+
+    def test_with_links_and_no_wrist_the_state_says_why_there_is_no_jog(self):
+        # The example's joints have a claw, no wrist: the links make no arm, and the page
+        # must say so (it showed no jog, and no reason).
+        async def scenario(port, world, robot, path):
+            token = await login(port)
+            reply = await state(port, token)
+            self.assertEqual(reply["arm"], False)
+            self.assertIn("no wrist", reply["no_arm"])
+
+        on_arm(scenario, robot_of=web_world.robot)
+
+    def test_playing_needs_the_armed_page(self):
+        async def scenario(port, world, robot):
+            token = await armed(port)
+            await http(port, "POST", "/api/add", {"pose": {"base": 30}, "ms": 500}, token)
+            other = await login(port)
+            status, reply = await http(port, "POST", "/api/play", {}, other)
+            self.assertEqual(status, 409, reply)
+            self.assertIn("arm the panel first", reply["error"])
+            await asyncio.sleep_ms(200)
+            self.assertEqual(moves(world), [])
+
+        run(scenario)
+
+    def test_a_jog_is_refused_while_a_sequence_plays(self):
+        async def scenario(port, world, robot, path):
+            token = await armed(port)
+            pose = {"base": 0, "shoulder": 30, "elbow": 60, "wrist": 60}
+            await http(port, "POST", "/api/add", {"pose": pose, "ms": 3000}, token)
+            await http(port, "POST", "/api/play", {}, token)
+            status, reply = await http(port, "POST", "/api/jog", {"axis": "x", "by": 5}, token)
+            self.assertEqual(status, 409, reply)
+            self.assertIn("a sequence is playing", reply["error"])
+            self.assertEqual(jog(_panels[-1]).line, None)
+
+        on_arm(scenario)
+
+    def test_a_stop_while_a_jog_or_a_home_reads_the_positions_ends_it(self):
+        # The first jog reads where the arm is (about 30 ms), as calibration's home does: a
+        # STOP meanwhile must end it, not be undone by it once the read has come.
+        async def scenario(port, world, robot, path):
+            token = await armed(port)
+            other = await login(port)
+            jogging = asyncio.create_task(
+                http(port, "POST", "/api/jog", {"axis": "z", "by": -5}, token)
+            )
+            await asyncio.sleep_ms(8)  # the jog's read is on its way
+            await http(port, "POST", "/api/estop", {}, other)
+            status, reply = await jogging
+            self.assertEqual(status, 409, reply)
+            self.assertIn("jog again", reply["error"])
+            self.assertEqual(moves(world)[-1][3], CMD_MULT_SERVO_UNLOAD)
+            token = await armed(port)
+            status, reply = await calibrate(port, world, token)
+            self.assertEqual(status, 200, reply)
+            status, reply = await http(port, "POST", "/api/calibrate", {"step": "save"}, token)
+            self.assertEqual(status, 200, reply)
+            homing = asyncio.create_task(
+                http(port, "POST", "/api/calibrate", {"step": "home", "confirm": True}, token)
+            )
+            await asyncio.sleep_ms(8)  # the home's read is on its way
+            await http(port, "POST", "/api/estop", {}, other)
+            status, reply = await homing
+            self.assertEqual(status, 409, reply)
+            self.assertEqual(moves(world)[-1][3], CMD_MULT_SERVO_UNLOAD)
+            await asyncio.sleep_ms(100)
+            self.assertEqual(world.sim.limp, {1, 2, 3, 4})
+
+        on_arm(scenario)
+
+    def test_calibration_is_refused_while_a_sequence_plays(self):
+        async def scenario(port, world, robot, path):
+            token = await armed(port)
+            await http(port, "POST", "/api/add", {"pose": {"base": 20}, "ms": 3000}, token)
+            await http(port, "POST", "/api/play", {}, token)
+            status, reply = await http(port, "POST", "/api/calibrate", {"step": "start"}, token)
+            self.assertEqual(status, 409, reply)
+            self.assertIn("a sequence is playing", reply["error"])
+            self.assertEqual(world.sim.limp, set())
+
+        on_arm(scenario)
+
+    def test_calibration_ends_a_stream_or_a_jog_on_its_way(self):
+        # The person takes hold of the limp arm: nothing may go on moving it.
+        async def scenario(port, world, robot, path):
+            token = await armed(port)
+            pose = {"base": 0, "shoulder": 20, "elbow": 70, "wrist": 60}
+            await http(port, "POST", "/api/target", {"targets": pose}, token)
+            self.assertTrue(await until(lambda: at(world, robot, "wrist", 60)))
+            for start in (
+                ("POST", "/api/jog", {"axis": "y", "by": 80}),  # 2 s of line
+                ("POST", "/api/target", {"targets": {"base": 90}}),  # a slow joint's way
+            ):
+                await http(port, start[0], start[1], start[2], token)
+                await asyncio.sleep_ms(100)
+                status, reply = await http(
+                    port, "POST", "/api/calibrate", {"step": "start"}, token
+                )
+                self.assertEqual(status, 200, reply)
+                self.assertTrue(await until(lambda: world.sim.limp == {1, 2, 3, 4}))
+                sent = robot.updates
+                await polled(port, token, 400)
+                self.assertEqual(robot.updates, sent, start)
+                self.assertEqual(world.sim.limp, {1, 2, 3, 4})
+                await http(port, "POST", "/api/calibrate", {"step": "cancel"}, token)
+
+        def slow(world):  # the base at 30 degrees/s: 3 s to 90
+            robot = arm_robot(world)
+            joints = dict(robot.joints)
+            joints["base"] = bm.Joint(1, dps=30)
+            return bm.Robot(robot.bus, joints)
+
+        on_arm(scenario, robot_of=slow)
+
+    def test_a_target_at_a_joints_limit_is_not_counted_as_clamped(self):
+        async def scenario(port, world, robot):
+            token = await armed(port)
+            for degrees in (90, -90):
+                targets = {"shoulder": degrees}
+                status, _ = await http(port, "POST", "/api/target", {"targets": targets}, token)
+                self.assertEqual(status, 200)
+                await asyncio.sleep_ms(100)
+            self.assertEqual(robot.clamped, 0)
+
+        run(scenario)
+
+
 class Lazy(Tidy):
     def test_a_panel_without_an_arm_imports_neither_the_arm_nor_the_calibration(self):
         # Its RAM is the robot program's: a panel with no links to jog, and no calibration
-        # begun, leaves busservo_arm, busservo_calibrate and its own busservo_web_arm on the
-        # filesystem.
+        # begun, leaves busservo_arm, busservo_calibrate and its own busservo_web_calibrate on
+        # the filesystem.
         script = (
             "import sys; sys.path.append('tests'); import web_world, busservo_web;"
             "p = busservo_web.Panel(web_world.robot(web_world.live()), 'secret-pw', path='%s');"
             "p.state(); print([m for m in sys.modules if m in ('busservo_arm',"
-            " 'busservo_calibrate', 'busservo_web_arm')])"
+            " 'busservo_calibrate', 'busservo_web_calibrate')])"
         )
         ok, out = sh('sh boards/unix.sh -c "%s"' % (script % scratch("none")))
         self.assertTrue(ok, out)
