@@ -156,12 +156,6 @@ pip_install() {
 }
 
 # What the modules chosen need, and only that, so that one module starts at once.
-# socat (a Debian package) puts the unix port's REPL behind a pty for the mpremote test.
-if selected test_install && ! command -v socat >/dev/null 2>&1; then
-    apt_install socat socat ||
-        echo "tests/run.sh: could not install socat: the mpremote test will be skipped" >&2
-fi
-
 # The web panel's browser tests (tests/browser.py): Selenium (pinned) drives Debian's Chromium
 # through its chromedriver; no browser is downloaded.
 if selected test_browser; then
