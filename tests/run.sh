@@ -56,7 +56,8 @@ CPY="$CPY test_arm test_calibrate test_web test_host"
 CPY_ONLY="test_host"
 # The longest modules start first, so that the short ones fill the other cores meanwhile and
 # the run ends soon after its longest module does (in the order of their times, measured).
-SLOW="test_soak test_browser test_examples test_web test_host test_reliability test_install"
+SLOW="test_soak test_browser test_examples test_web test_board test_host test_reliability"
+SLOW="$SLOW test_install"
 SLOW="$SLOW test_e2e"
 SLOW="$SLOW test_scripts test_bench_web test_arm test_docs"
 # The modules on simulated time alone (tests/wire.py's clock: nothing real is waited for) run
