@@ -7,10 +7,8 @@
 # web=True freezes the web panel (busservo_web) too; it needs its page copied to the board's
 # /lib: mpremote cp lib/busservo_web.html.gz :/lib/ (its jog needs arm=True, its calibration
 # page calibration=True)
-metadata(
-    description="Driver for the serial Bus Servo Controller (LOBOT/Hiwonder, 0x55 0x55 frames).",
-    version="0.1.0",
-)
+# No metadata(): included, it would become the whole firmware's (and a second library's would
+# fail with "Duplicate call to metadata()"). busservo.__version__ says the driver's version.
 options.defaults(sim=False, asyncio=False, motion=False, web=False, arm=False, calibration=False)
 
 module("busservo.py", base_path="lib")

@@ -1,6 +1,7 @@
 # Moves servos 1 and 2, runs action group 1; real servos only once I_HAVE_CHECKED_MY_ROBOT = True.
 # busservo with asyncio: a control loop keeps its pace while other tasks wait for the
 # controller's answers and for an action group to complete.
+#   mpremote mip install lib/busservo_async.json   # once: the driver, its asyncio face
 #   mpremote run examples/async_demo.py
 import asyncio
 import time

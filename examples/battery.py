@@ -1,4 +1,5 @@
 # Moves nothing: reads the controller's battery voltage, without blocking, then blocking.
+#   mpremote mip install package.json   # once: the driver
 #   mpremote run examples/battery.py
 import time
 

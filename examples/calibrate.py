@@ -9,8 +9,8 @@
 # can turn the servos: the example's own hands do, and it saves nothing.
 #
 # On a board it runs at the board's REPL, where your Enter reaches it (`mpremote run`
-# forwards no keys: it would wait for ever, the arm limp). With the driver (and
-# busservo_board.py), the motion layer, busservo_calibrate.py and board.py on the board:
+# forwards no keys: it would wait for ever, the arm limp). With board.py on the board:
+#   mpremote mip install lib/busservo_calibrate.json   # once: the driver, motion, calibration
 #   mpremote cp examples/calibrate.py :calibrate.py
 #   mpremote repl              then type: import calibrate      (Ctrl-] leaves mpremote)
 # To calibrate again: Ctrl-D (a soft reset), then import calibrate. With a board.py that offers

@@ -1,10 +1,11 @@
 # Moves nothing: asks the controller for its battery voltage and, if it stays silent, says why.
 # Run it first, once the wires are on: a working link answers in about 10.4 ms (10 bytes of
-# wire at 9600 baud: the 4-byte question and the 6-byte answer). It ends with exit status 1
-# when the controller (or a servo it reads) does not answer, so a script can use it.
+# wire at 9600 baud: the 4-byte question and the 6-byte answer). When the controller (or a
+# servo it reads) does not answer, it ends with an OSError, exit status 1, so that a script can
+# tell: through `mpremote run` too, which reports a board's sys.exit() as status 0.
+#   mpremote mip install package.json   # once: the driver
 #   mpremote run examples/check_wiring.py
 import errno
-import sys
 import time
 
 import busservo_board
@@ -35,7 +36,7 @@ except OSError as e:
         raise
 took = time.ticks_diff(time.ticks_us(), start)
 
-works = mv is not None
+fault: OSError | None = None  # what ends it with exit status 1, if anything
 if mv is not None:
     print("battery: %.2f V" % (mv / 1000))
     print("round trip: %.1f ms (about 10.4 ms on a wire at 9600 baud)" % (took / 1000))
@@ -46,13 +47,14 @@ if mv is not None:
         silent = [i for i in sorted(read) if read[i] is None]
         if silent:
             print("servos %s do not answer: their power, the bus cable, their ids" % silent)
-            works = False
+            fault = OSError(errno.ENODEV, "servos %s do not answer" % silent)
 else:
     print("no answer from the controller within 100 ms. The likely causes, in order:")
     for n, (cause, check) in enumerate(CAUSES, 1):
         print("%d. %s\n   check: %s" % (n, cause, check))
+    fault = OSError(errno.ETIMEDOUT, "no answer from the controller: the likely causes are above")
 if bus.noise:
     print("%d bytes came that made no frame: something talks, but garbled." % bus.noise)
     print("That points to the baud rate (9600 8N1), the logic level, or the ground.")
-if not works:
-    sys.exit(1)  # for a script or a CI: the link does not work yet
+if fault:
+    raise fault  # for a script or a CI: the link does not work yet

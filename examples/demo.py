@@ -3,6 +3,7 @@
 # watch them mid-move and at rest, run an action group and wait for it to complete.
 #
 #   sh boards/unix.sh examples/demo.py     # unix port, simulated controller
+#   mpremote mip install package.json      # once: the driver
 #   mpremote run examples/demo.py          # a board, with board.py and a controller
 import time
 

@@ -1,6 +1,7 @@
 # Runs action group 1, then 2 until stopped; real servos only once I_HAVE_CHECKED_MY_ROBOT = True.
 # The action groups are the ones downloaded to the controller beforehand; this waits for their
 # events with poll(), which never blocks.
+#   mpremote mip install package.json   # once: the driver
 #   mpremote run examples/group.py
 import time
 

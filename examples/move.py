@@ -1,4 +1,5 @@
 # Moves servo 1 to 800, then back to 500; real servos only once I_HAVE_CHECKED_MY_ROBOT = True.
+#   mpremote mip install package.json   # once: the driver
 #   mpremote run examples/move.py
 import time
 

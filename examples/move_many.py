@@ -1,4 +1,5 @@
 # Moves servos 1..6 to 200..950 and back; real servos only once I_HAVE_CHECKED_MY_ROBOT = True.
+#   mpremote mip install package.json   # once: the driver
 #   mpremote run examples/move_many.py
 import time
 

@@ -2,6 +2,7 @@
 # Play a sequence back: from teach.json (written by examples/teach.py) if there is one, else
 # a wave made here. Once with player.step() from a loop, then looping at twice the speed until
 # stopped, then with asyncio (await player). estop() stops everything and lets the joints go.
+#   mpremote mip install lib/busservo_motion.json   # once: the driver, the motion layer
 #   mpremote run examples/playback.py
 import asyncio
 import time

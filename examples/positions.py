@@ -1,4 +1,5 @@
 # Moves nothing: reads where servos 1..6 are, as a dict {servo_id: position}.
+#   mpremote mip install package.json   # once: the driver
 #   mpremote run examples/positions.py
 import busservo_board
 

@@ -1,5 +1,6 @@
 # Moves nothing: sets action group 1 to half speed, every other group to 100 %, until power-off.
 # Nothing runs until examples/group.py (or your code) starts a group.
+#   mpremote mip install package.json   # once: the driver
 #   mpremote run examples/speed.py
 import busservo
 import busservo_board

@@ -2,6 +2,7 @@
 # A sine wave to six joints at the wire's pace: the loop sets new targets every 10 ms
 # with stream(), which only stores them; step() sends the latest in one frame whenever the wire
 # is free, so the loop never waits and no stale target is queued. Prints the updates a second.
+#   mpremote mip install lib/busservo_motion.json   # once: the driver, the motion layer
 #   mpremote run examples/stream.py
 import math
 import time

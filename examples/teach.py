@@ -5,8 +5,8 @@
 # pose it, so the example poses it.
 #
 # On a board it runs at the board's REPL, where your Enter reaches it (`mpremote run`
-# forwards no keys: input() would wait for ever, the arm limp). With the driver (and
-# busservo_board.py), the motion layer and board.py on the board:
+# forwards no keys: input() would wait for ever, the arm limp). With board.py on the board:
+#   mpremote mip install lib/busservo_motion.json   # once: the driver, the motion layer
 #   mpremote cp examples/teach.py :teach.py
 #   mpremote repl              then type: import teach      (Ctrl-] leaves mpremote)
 # To teach again: Ctrl-D (a soft reset), then import teach. With a board.py that offers

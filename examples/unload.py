@@ -1,6 +1,7 @@
 # Lets servos 1..6 go limp (an arm falls!); real servos only once I_HAVE_CHECKED_MY_ROBOT = True.
 # Unloaded servos lose their holding torque and turn freely by hand; the next move gives it back.
 # Handy for posing a robot by hand, then reading the pose.
+#   mpremote mip install package.json   # once: the driver
 #   mpremote run examples/unload.py
 import time
 

@@ -9,8 +9,15 @@
 # On a board with Wi-Fi (ESP32, Pico W): its board.py gives uart() and, to join your
 # network, WIFI = ("network name", "its password"); without WIFI the board starts its own
 # access point, "busservo", whose WPA2 key is the panel's password. The board prints the
-# address to open and the password. Install the panel first (docs/panel.md).
-#   mpremote run examples/web_panel.py
+# address to open and the password. It serves until stopped: run it at the board's REPL,
+# where Ctrl-C stops it (and the joints hold). With board.py on the board (docs/panel.md):
+#   mpremote mip install lib/busservo_web.json   # once: the driver, motion, the panel, its page
+#   mpremote cp examples/web_panel.py :web_panel.py
+#   mpremote repl              then type: import web_panel      (Ctrl-] leaves mpremote)
+# To serve again: Ctrl-D (a soft reset), then import web_panel. `mpremote run
+# examples/web_panel.py` serves too, but a Ctrl-C there stops mpremote, not the board: the
+# panel goes on serving and holding the robot until `mpremote soft-reset` (which sends the
+# board a Ctrl-C, then resets it). Copied as main.py it serves from power-up.
 # On the unix port, against the simulated controller, at http://127.0.0.1:8080 (and on your
 # PC's other addresses: it listens on every interface, as a board does):
 #   sh boards/unix.sh examples/web_panel.py [--port N] [--password P]
@@ -37,6 +44,9 @@ except ImportError:  # no board.py (busservo_board.bus() says so), or no WIFI in
     WIFI = None
 
 UNIX = sys.platform in ("linux", "darwin")
+# Sent to a board's REPL by `mpremote run`, which passes no Ctrl-C on: a soft reset stops it.
+SENT = globals().get("__file__") == "<stdin>"
+COMMAND_LINE = UNIX and __name__ == "__main__" and not SENT  # sh boards/unix.sh: --port N
 PASSWORD_FILE = "web_panel.txt"
 
 
@@ -142,7 +152,13 @@ def main():
     except OSError as e:
         if e.errno != errno.EADDRINUSE:
             raise
-        print("port %d is in use (another panel?): give another with --port N" % port)
+        if COMMAND_LINE:
+            print("port %d is in use (another panel?): give another with --port N" % port)
+        else:  # a board: most likely a panel that still serves
+            print(
+                "port %d is in use (another panel?): a soft reset frees it (Ctrl-D at the "
+                "board's REPL, or mpremote soft-reset)" % port
+            )
         raise SystemExit(1)
     finally:
         robot.hold()
@@ -165,7 +181,10 @@ async def serve(robot, key, port, address):
             "open http://%s%s/ and log in with the password %s"
             % (address, "" if port == 80 else ":%d" % port, key)
         )
-        print("(Ctrl-C stops the panel)")
+        if SENT:
+            print("(mpremote soft-reset stops the panel: a Ctrl-C stops only mpremote)")
+        else:
+            print("(Ctrl-C stops the panel)")
     await server
     if failed:
         raise failed[0]

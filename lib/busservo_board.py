@@ -7,7 +7,8 @@
 # bus() is a BusServo on the uart() of your board.py (your port's file from boards/, copied
 # to the board as board.py), or, where there is no board.py, on the simulated controller
 # (lib/busservo_sim.py), which it says. A board.py that fails to import stops it with its own
-# error: only a missing one means the simulator. `simulated` says which it took.
+# error: only a missing one means the simulator. `simulated` says which it took. With neither
+# on the board, an ImportError says what to copy.
 #
 # robot(bus, joints) is the Robot your calibration saved to CALIBRATION (robot.json, in the
 # folder the program runs from: a board's root), so that every example moves your arm within
@@ -28,7 +29,16 @@ def bus():
     except ImportError as e:
         if "'board'" not in str(e):
             raise  # board.py is there but fails to import: its error, not the simulator
-        from busservo_sim import uart
+        try:
+            from busservo_sim import uart
+        except ImportError as e:
+            if "'busservo_sim'" not in str(e):
+                raise
+            raise ImportError(
+                "no board.py, nor the simulator: copy your port's board file as board.py "
+                "(mpremote cp boards/esp32.py :board.py), or install the simulator "
+                "(mpremote mip install lib/busservo_sim.json)"
+            ) from None
 
         simulated = True
         print("no board.py found: using the simulated controller, nothing real moves")

@@ -57,7 +57,8 @@ CPY="$CPY test_arm test_calibrate test_web test_host test_hid"
 CPY_ONLY="test_host test_hid"
 # The longest modules start first, so that the short ones fill the other cores meanwhile and
 # the run ends soon after its longest module does (in the order of their times, measured).
-SLOW="test_soak test_browser test_examples test_web test_host test_reliability test_install"
+SLOW="test_soak test_browser test_examples test_web test_board test_host test_reliability"
+SLOW="$SLOW test_install"
 SLOW="$SLOW test_e2e"
 SLOW="$SLOW test_scripts test_bench_web test_arm test_docs"
 # The modules on simulated time alone (tests/wire.py's clock: nothing real is waited for) run
@@ -157,12 +158,6 @@ pip_install() {
 }
 
 # What the modules chosen need, and only that, so that one module starts at once.
-# socat (a Debian package) puts the unix port's REPL behind a pty for the mpremote test.
-if selected test_install && ! command -v socat >/dev/null 2>&1; then
-    apt_install socat socat ||
-        echo "tests/run.sh: could not install socat: the mpremote test will be skipped" >&2
-fi
-
 # The web panel's browser tests (tests/browser.py): Selenium (pinned) drives Debian's Chromium
 # through its chromedriver; no browser is downloaded.
 if selected test_browser; then

@@ -28,6 +28,12 @@ LINKS = {"base_height": 70, "upper_arm": 105, "forearm": 98, "hand": 150}
 REACH = 105 + 98  # the wrist's furthest from the shoulder's axis: the elbow straight
 
 
+def links_of(text):
+    """The first links dict {"base_height": ...} written in text, in floats."""
+    at = text.index('{"base_height"')
+    return {k: float(v) for k, v in json.loads(text[at : text.index("}", at) + 1]).items()}
+
+
 def world(port="rp2"):
     """(world, bus), with the driver, the motion layer and the arm on the world's clock."""
     w = wire.World(port)
@@ -674,6 +680,54 @@ class Docs(unittest.TestCase):
         finally:
             sh("rm -rf " + folder)
         self.assertTrue("Traceback" not in out, out)
+
+    def test_the_pages_example_keeps_the_links_a_maker_saved(self):
+        # On a real arm (a board.py: here the simulator stands for its controller), with the
+        # robot.json a calibration saved: it moves the arm it finds there and leaves the file
+        # as it was. With none, it saves its own.
+        code = block(open("docs/arm.md").read(), "## In a few lines", "```python")
+        limits = {"shoulder": [-90, 90], "elbow": [-30, 120], "gripper": [0, 60]}
+        joints = {}
+        for i, name in enumerate(("base", "shoulder", "elbow", "wrist", "gripper")):
+            joints[name] = {"servo_id": i + 1, "kind": "BUS", "direction": 1, "trim": 0.0}
+            joints[name].update({"limits": limits.get(name, [-120, 120]), "dps": None})
+        links = {"base_height": 71.5, "upper_arm": 104, "forearm": 99, "hand": 148}
+        saved = {"joints": joints, "links": links}
+        for before in (saved, None):
+            folder = scratch("arm")
+            os.mkdir(folder)
+            try:
+                with open(folder + "/board.py", "w") as f:
+                    f.write("from busservo_sim import SimController as uart\n")
+                if before:
+                    with open(folder + "/robot.json", "w") as f:
+                        f.write(json.dumps(before))
+                out = run("\n".join(code) + '\nprint("links", arm.links)\n', "links {", folder)
+                with open(folder + "/robot.json") as f:
+                    after = json.loads(f.read())
+            finally:
+                sh("rm -rf " + folder)
+            self.assertTrue("Traceback" not in out, out)
+            if before:
+                self.assertEqual(after, before)  # nothing in the file changed
+                self.assertIn("'hand': 148", out)
+            else:
+                self.assertEqual(after["links"], links_of(" ".join(code)))
+
+    def test_the_pages_links_are_calibrate_mds(self):
+        # One arm in both pages: the links the calibration asks for, saves and shows in code
+        # are the ones docs/arm.md's example gives.
+        arm = links_of(
+            " ".join(block(open("docs/arm.md").read(), "## In a few lines", "```python"))
+        )
+        calibrate = open("docs/calibrate.md").read()
+        asked = calibrate.split("links in mm, axis to axis (")[1]
+        names = asked.split(")")[0].split()  # in the order the example asks for them
+        typed = asked.split("or Enter to leave them out: ")[1].split("\n")[0].split()
+        self.assertEqual(dict(zip(names, [float(x) for x in typed])), arm)
+        shown = calibrate[calibrate.index('"links": {') + len('"links": ') :]
+        self.assertEqual(links_of(shown), arm)
+        self.assertEqual(links_of(calibrate[calibrate.index("links={") + len("links=") :]), arm)
 
     def test_the_picture_is_well_formed_svg_and_shows_the_conventions(self):
         svg = "docs/arm.svg"

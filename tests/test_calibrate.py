@@ -608,9 +608,13 @@ class Example(unittest.TestCase):
             header = [line for line in f if line.startswith("#   mpremote ")]
         self.assertEqual(
             [line.split("  ")[1].strip() for line in header],
-            ["mpremote cp examples/calibrate.py :calibrate.py", "mpremote repl"],
+            [
+                "mpremote mip install lib/busservo_calibrate.json",
+                "mpremote cp examples/calibrate.py :calibrate.py",
+                "mpremote repl",
+            ],
         )
-        self.assertIn("then type: import calibrate", header[1])
+        self.assertIn("then type: import calibrate", header[2])
 
     def test_a_maker_calibrates_with_the_keys_and_homes_slowly(self):
         ok, out, taken = self.run_typed(
@@ -619,7 +623,7 @@ class Example(unittest.TestCase):
                 ("1. hold the arm in its rest pose", "\\r"),
                 ("range seen, degrees: " + SEEN, "\\r"),
                 ("nudged from the rest pose, degrees: " + NUDGE, "\\r"),
-                ("or Enter to leave them out:", "70 105 98.5 60\\r"),
+                ("or Enter to leave them out:", "70 105 98 150\\r"),
                 ("Enter alone: no):", "y\\r"),
                 ("home: ", ""),
             ),
@@ -636,7 +640,7 @@ class Example(unittest.TestCase):
         with open(self.dir + "/robot.json") as f:
             saved = json.loads(f.read())
         self.assertEqual(
-            saved["links"], {"base_height": 70, "upper_arm": 105, "forearm": 98.5, "hand": 60}
+            saved["links"], {"base_height": 70, "upper_arm": 105, "forearm": 98, "hand": 150}
         )
         robot = bm.Robot.load(busservo.BusServo(SimController()), self.dir + "/robot.json")
         self.assertEqual(robot.names, ["base", "shoulder", "elbow", "wrist", "gripper"])

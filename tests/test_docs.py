@@ -132,7 +132,7 @@ class FrontPage(unittest.TestCase):
         ]
         self.assertIn("wiring-pico.svg", wires)
         self.assertIn("not 5 V tolerant", wires)
-        self.assertIn("mpremote mip install github:OWNER/busservo@v", install)
+        self.assertIn("mpremote mip install package.json", install)
         self.assertIn(":board.py", board)
         self.assertIn("mpremote run examples/check_wiring.py", check)
         self.assertIn("mpremote run examples/demo.py", demo)

