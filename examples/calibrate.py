@@ -24,6 +24,7 @@ import time
 
 import busservo_board
 import busservo_calibrate as bc
+import busservo_motion as bm
 
 # Set True once you hold the arm (limp, it falls) and each joint turns freely by hand.
 I_HAVE_CHECKED_MY_ROBOT = False
@@ -31,7 +32,7 @@ I_HAVE_CHECKED_MY_ROBOT = False
 # servo cannot tell the controller where a hand turned it: leave such a joint out.
 IDS = {"base": 1, "shoulder": 2, "elbow": 3, "wrist": 4, "gripper": 5}
 DPS = 30  # the first home(): no joint turns faster (degrees a second)
-PATH = busservo_board.CALIBRATION  # robot.json: every example loads it
+PATH = bm.CALIBRATION  # robot.json: every example loads it
 
 bus = busservo_board.bus()  # board.py's UART, or the simulated controller
 if busservo_board.simulated:

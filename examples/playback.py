@@ -20,15 +20,7 @@ if busservo_board.simulated:
     DPS = None  # nor to hurt: full speed
 
 # Your calibration (robot.json, if you saved one), or these joints.
-arm = busservo_board.robot(
-    bus,
-    {
-        "base": bm.Joint(1, dps=DPS),
-        "shoulder": bm.Joint(2, limits=(-90, 90), dps=DPS),
-        "elbow": bm.Joint(3, limits=(-90, 90), dps=DPS),
-        "claw": bm.Joint(4, limits=(0, 60), dps=DPS),
-    },
-)
+arm = busservo_board.robot(bus, busservo_board.joints(dps=DPS))
 print("the servos are at", bus.read_positions([arm.joints[n].servo_id for n in arm.names]))
 print("this plays teach.json (or a wave) on them, at most 30 degrees/s on a real robot")
 if not I_HAVE_CHECKED_MY_ROBOT:

@@ -30,15 +30,7 @@ if busservo_board.simulated:
 PATH = "teach.json"
 MS = 1000  # to go from one pose to the next, in playback
 # Your calibration (robot.json, if you saved one), or these joints.
-arm = busservo_board.robot(
-    bus,
-    {
-        "base": bm.Joint(1, dps=DPS),
-        "shoulder": bm.Joint(2, limits=(-90, 90), dps=DPS),
-        "elbow": bm.Joint(3, limits=(-90, 90), dps=DPS),
-        "claw": bm.Joint(4, limits=(0, 60), dps=DPS),
-    },
-)
+arm = busservo_board.robot(bus, busservo_board.joints(dps=DPS))
 print("the servos are at", bus.read_positions([arm.joints[n].servo_id for n in arm.names]))
 print("this lets them go limp, captures the poses you make by hand, then plays them back")
 if not I_HAVE_CHECKED_MY_ROBOT:

@@ -30,7 +30,6 @@ import os
 import sys
 
 import busservo_board
-import busservo_motion as bm
 import busservo_web
 
 # Set True once servos 1..4 can turn freely: the page moves them as far as each joint's
@@ -130,15 +129,7 @@ def main():
     simulated = busservo_board.simulated  # nothing real to check, nor to hurt: full speed
     dps = None if simulated else DPS
     # Your calibration (robot.json, if you saved one), or these joints.
-    robot = busservo_board.robot(
-        bus,
-        {
-            "base": bm.Joint(1, dps=dps),
-            "shoulder": bm.Joint(2, limits=(-90, 90), dps=dps),
-            "elbow": bm.Joint(3, limits=(-90, 90), dps=dps),
-            "claw": bm.Joint(4, limits=(0, 60), dps=dps),
-        },
-    )
+    robot = busservo_board.robot(bus, busservo_board.joints(dps=dps))
     ids = [robot.joints[name].servo_id for name in robot.names]
     print("the servos are at", bus.read_positions(ids))
     print("this serves a web page whose sliders move them, and whose STOP lets them go limp")

@@ -17,7 +17,6 @@
 #
 # Floats are heap objects on most ports: a solve allocates. The line's step() solves only
 # when the wire can take a frame, and streams through one dict made in Arm().
-import json
 import math
 import time
 
@@ -31,7 +30,6 @@ except ImportError:  # CPython, on a computer: busservo_cpython gives what it la
     from busservo_cpython import awaitable as _awaitable
     from busservo_cpython import time
 
-CALIBRATION = "robot.json"  # busservo_board.CALIBRATION: the joints, and the links beside them
 JOINTS = ("base", "shoulder", "elbow", "wrist")
 LINKS = ("base_height", "upper_arm", "forearm", "hand")
 
@@ -45,24 +43,11 @@ _CHECK_MM = 2  # a line is checked every this many mm (and degrees of pitch)
 _CHECKS_MAX = 500
 _DPS = 0.9  # a line plans a joint's speed at most this share of its dps
 _LATE_MS = 100  # a line's time moves on at most this much an update: a late loop slows it
-_INF = float("inf")
 
-_asyncio = None  # imported by the first Line.run(): many arms never need it
+_number = busservo_motion.number  # a finite number in a range, or raise naming it
 _type = type
 _int = int
 _float = float
-
-
-def _number(name, value, low=-_INF, high=_INF):
-    # A finite int or float in low..high, or raise naming it, the range and what came.
-    t = _type(value)
-    if t is not _int and t is not _float:
-        raise TypeError("%s must be a number, got %r" % (name, value))
-    if not low <= value <= high or not -_INF < value < _INF:
-        if low == -_INF and high == _INF:
-            raise ValueError("%s must be a finite number, got %r" % (name, value))
-        raise ValueError("%s must be in %s..%s, got %r" % (name, low, high, value))
-    return value
 
 
 def check_links(links):
@@ -91,18 +76,6 @@ def _wrap(degrees):
     while degrees <= -180:
         degrees += 360
     return degrees
-
-
-def _read(path, key):
-    # config (a dict) and config[key] of the JSON file at path, or ValueError naming the file.
-    with open(path) as f:
-        try:
-            config = json.load(f)
-        except ValueError as e:
-            raise ValueError("%s: not valid JSON (%s)" % (path, e))
-    if _type(config) is not dict or key not in config:
-        raise ValueError("%s: no %r in it, as Arm.save() writes" % (path, key))
-    return config[key]
 
 
 class Arm:
@@ -135,13 +108,14 @@ class Arm:
     # Calibration.
 
     @staticmethod
-    def load(bus_or_robot, path=CALIBRATION, elbow_up=True):
+    def load(bus_or_robot, path=None, elbow_up=True):
         """The Arm whose links save() wrote to path, on a Robot of the joints saved there (on
         bus), or on the robot given."""
+        path = path or busservo_motion.CALIBRATION
         robot = bus_or_robot
         if not isinstance(robot, busservo_motion.Robot):
             robot = busservo_motion.Robot.load(bus_or_robot, path)
-        links = _read(path, "links")
+        links = busservo_motion.load_json(path, "links", "Arm.save()")
         if _type(links) is not dict:
             raise ValueError("%s: links must be {name: mm}, got %r" % (path, links))
         try:
@@ -149,10 +123,11 @@ class Arm:
         except (TypeError, ValueError) as e:
             raise ValueError("%s: %s" % (path, e))
 
-    def save(self, path=CALIBRATION):
-        """Write the joints' calibration and the links to path as JSON, keeping what else the
-        file holds (Robot.load() and Arm.load() read it)."""
-        self.robot.save(path, links=dict(self.links))
+    def save(self, path=None):
+        """Write the joints' calibration and the links to path (default
+        busservo_motion.CALIBRATION) as JSON, keeping what else the file holds (Robot.load()
+        and Arm.load() read it)."""
+        self.robot.save(path or busservo_motion.CALIBRATION, links=dict(self.links))
 
     # The geometry.
 
@@ -542,17 +517,12 @@ class Line:
 
     async def run(self, poll_ms=5):
         """Step to the end of the line, sleeping between frames: other tasks run meanwhile."""
-        global _asyncio
-        if _asyncio is None:
-            import asyncio as _asyncio
-
-            if not hasattr(_asyncio, "sleep_ms"):  # CPython: busservo_cpython's has it
-                from busservo_cpython import asyncio as _asyncio
+        asyncio = busservo_motion.aio()
         while not self.done:
             self.step()
             if not self.done:
                 wait = self.robot.bus.wire_ms()
-                await _asyncio.sleep_ms(min(poll_ms, wait) if wait else 1)
+                await asyncio.sleep_ms(min(poll_ms, wait) if wait else 1)
 
     def __await__(self):
         return self.run()

@@ -28,9 +28,6 @@ from typing import Any, Generator, Mapping
 from busservo import BusServo
 from busservo_motion import Robot
 
-CALIBRATION: str
-"""The calibration file's default path, "robot.json" (busservo_board.CALIBRATION): the joints,
-and the links beside them."""
 JOINTS: tuple[str, ...]
 """The joints an arm needs, by name: ("base", "shoulder", "elbow", "wrist")."""
 LINKS: tuple[str, ...]
@@ -60,12 +57,12 @@ class Arm:
         them. Raises ValueError or TypeError saying what is missing or wrong."""
     @staticmethod
     def load(
-        bus_or_robot: BusServo | Robot, path: str = "robot.json", elbow_up: bool = True
+        bus_or_robot: BusServo | Robot, path: str | None = None, elbow_up: bool = True
     ) -> Arm:
         """The Arm with the links save() wrote to path, on a Robot of the joints saved there
         (given a BusServo), or on the Robot given. A file that is not valid JSON, or holds no
         "links", raises ValueError naming the file and why."""
-    def save(self, path: str = "robot.json") -> None:
+    def save(self, path: str | None = None) -> None:
         """Write the joints' calibration and the links to path as JSON,
         {"joints": {...}, "links": {...}}, keeping whatever else the file holds. Robot.load()
         reads its joints, Arm.load() both."""

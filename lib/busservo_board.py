@@ -3,6 +3,7 @@
 #   import busservo_board
 #   bus = busservo_board.bus()               # board.py's UART, or the simulated controller
 #   arm = busservo_board.robot(bus, JOINTS)  # the calibration you saved, or these joints
+#   arm = busservo_board.robot(bus, busservo_board.joints(dps=30))   # or the examples' arm
 #
 # bus() is a BusServo on the uart() of your board.py (your port's file from boards/, copied
 # to the board as board.py), or, where there is no board.py, on the simulated controller
@@ -10,14 +11,14 @@
 # error: only a missing one means the simulator. `simulated` says which it took. With neither
 # on the board, an ImportError says what to copy.
 #
-# robot(bus, joints) is the Robot your calibration saved to CALIBRATION (robot.json, in the
-# folder the program runs from: a board's root), so that every example moves your arm within
-# the limits you found; without that file, a Robot of the joints the example gives.
+# robot(bus, joints) is the Robot your calibration saved to busservo_motion.CALIBRATION
+# (robot.json, in the folder the program runs from: a board's root), so that every example
+# moves your arm within the limits you found; without that file, a Robot of the joints the
+# example gives: joints() are the examples' arm (a base, a shoulder, an elbow and a claw).
 import errno
 
 import busservo
 
-CALIBRATION = "robot.json"  # Robot.save(CALIBRATION) writes it, Robot.load() reads it
 simulated = False  # True once bus() took the simulated controller
 
 
@@ -48,14 +49,29 @@ def bus():
 
 
 def robot(bus, joints):
-    """The Robot saved to CALIBRATION, or with no such file, a Robot of joints on bus."""
+    """The Robot saved to busservo_motion.CALIBRATION, or with no such file, a Robot of
+    joints on bus."""
     import busservo_motion
 
+    path = busservo_motion.CALIBRATION
     try:
-        arm = busservo_motion.Robot.load(bus, CALIBRATION)
+        arm = busservo_motion.Robot.load(bus, path)
     except OSError as e:
         if e.args[0] != errno.ENOENT:
             raise
         return busservo_motion.Robot(bus, joints)  # no calibration saved: the example's
-    print("using the calibration in %s: joints %s" % (CALIBRATION, ", ".join(arm.names)))
+    print("using the calibration in %s: joints %s" % (path, ", ".join(arm.names)))
     return arm
+
+
+def joints(dps=None):
+    """The examples' arm: {name: busservo_motion.Joint} of a base, a shoulder, an elbow and a
+    claw on servos 1..4, each turning at most dps degrees a second (None: as fast as asked)."""
+    import busservo_motion as bm
+
+    return {
+        "base": bm.Joint(1, dps=dps),
+        "shoulder": bm.Joint(2, limits=(-90, 90), dps=dps),
+        "elbow": bm.Joint(3, limits=(-90, 90), dps=dps),
+        "claw": bm.Joint(4, limits=(0, 60), dps=dps),
+    }

@@ -219,7 +219,7 @@ class Calibration:
         return bm.Robot(self.bus if bus is None else bus, self.joints())
 
     def save(self, path=None, links=None):
-        """Write the calibration to path (default busservo_board.CALIBRATION, robot.json)
+        """Write the calibration to path (default busservo_motion.CALIBRATION, robot.json)
         as Robot.load() reads it, with links {name: mm} if given (measured with a ruler, for
         busservo_arm, which checks them), keeping what else the file holds (links saved
         before). Refuses as robot() does, before the file is touched. Returns the Robot."""
@@ -230,6 +230,6 @@ class Calibration:
 
             more["links"] = check_links(links)
         if path is None:
-            from busservo_board import CALIBRATION as path
+            path = bm.CALIBRATION
         robot.save(path, **more)  # what else the file holds (the links measured before) kept
         return robot

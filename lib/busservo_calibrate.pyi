@@ -86,7 +86,7 @@ class Calibration:
         """A Robot of the calibrated joints, on bus (default: this calibration's), or
         ValueError naming each joint that cannot be calibrated and why."""
     def save(self, path: str | None = None, links: Mapping[str, float] | None = None) -> Robot:
-        """Write the calibration to path (default busservo_board.CALIBRATION, robot.json) as
+        """Write the calibration to path (default busservo_motion.CALIBRATION, robot.json) as
         Robot.load() reads it, with links {name: mm} of busservo_arm.LINKS if given (measured
         with a ruler, for busservo_arm): {"joints": {name: Joint settings}, "links": {...}},
         keeping what else the file holds (links saved before). Refuses as robot() does, and

@@ -591,18 +591,9 @@ def _stop(run, words, options):
 def _robot(bus, dps):
     # The panel's robot: the calibration in robot.json, or examples/web_panel.py's joints.
     import busservo_board
-    import busservo_motion as bm
 
     try:
-        return busservo_board.robot(
-            bus,
-            {
-                "base": bm.Joint(1, dps=dps),
-                "shoulder": bm.Joint(2, limits=(-90, 90), dps=dps),
-                "elbow": bm.Joint(3, limits=(-90, 90), dps=dps),
-                "claw": bm.Joint(4, limits=(0, 60), dps=dps),
-            },
-        )
+        return busservo_board.robot(bus, busservo_board.joints(dps=dps))
     except (ValueError, TypeError) as e:  # the file's words: they name it
         raise _BadFile(
             "%s (the calibration in the folder you run from: mend it, or move it away)" % e

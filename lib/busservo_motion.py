@@ -48,16 +48,29 @@ _LATE_MS = const(50)  # a player's step this late starts its timing afresh
 _INF = float("inf")
 _NINF = float("-inf")
 
-_asyncio = None  # imported by the first Player.run(): many robots never need it
+CALIBRATION = "robot.json"  # where a calibration is saved: the joints (and an arm's links)
+
+_asyncio = None  # imported by the first aio(): many robots never need it
 _bits = bytearray(4)  # a float's bits, for Joint.position()
 _type = type
 _int = int
 _float = float
 
 
-def _load(path, key, saver):
-    # config[key] of the JSON file at path (saver wrote it), or ValueError naming the file
-    # and what is wrong with it.
+def aio():
+    """The asyncio module, imported when first asked for (many robots never need it)."""
+    global _asyncio
+    if _asyncio is None:
+        import asyncio as _asyncio
+
+        if not hasattr(_asyncio, "sleep_ms"):  # CPython: busservo_cpython's has it
+            from busservo_cpython import asyncio as _asyncio
+    return _asyncio
+
+
+def load_json(path, key, saver):
+    """config[key] of the JSON file at path (saver wrote it), or ValueError naming the file
+    and what is wrong with it."""
     with open(path) as f:
         try:
             config = json.load(f)
@@ -68,8 +81,9 @@ def _load(path, key, saver):
     return config[key]
 
 
-def _number(name, value, low=_NINF, high=_INF):
-    # A finite int or float in low..high, or raise naming it, the range and what came.
+def number(name, value, low=_NINF, high=_INF):
+    """value, a finite int or float in low..high; else TypeError or ValueError naming it
+    (name), the range and what came."""
     t = _type(value)
     if t is not _int and t is not _float:
         raise TypeError("%s must be a number, got %r" % (name, value))
@@ -81,7 +95,7 @@ def _number(name, value, low=_NINF, high=_INF):
 
 
 def _dps(dps):
-    _number("dps", dps, 0)
+    number("dps", dps, 0)
     if not dps:
         raise ValueError("dps must be more than 0 degrees/s, got %r" % (dps,))
 
@@ -107,7 +121,7 @@ class Joint:
         if direction != 1 and direction != -1:
             raise ValueError("direction must be 1 or -1, got %r" % (direction,))
         centre, num, den, half = _KINDS[kind]
-        _number("trim", trim, -half, half)
+        number("trim", trim, -half, half)
         # The degrees the servo can reach, with this direction and trim.
         low = -half - trim if direction > 0 else trim - half
         high = half - trim if direction > 0 else trim + half
@@ -117,8 +131,8 @@ class Joint:
             lo, hi = limits
         except (TypeError, ValueError):
             raise TypeError("limits must be (low, high) in degrees, got %r" % (limits,))
-        _number("limits", lo)
-        _number("limits", hi)
+        number("limits", lo)
+        number("limits", hi)
         if not low <= lo <= hi <= high:
             raise ValueError(
                 "limits must be low <= high within %g..%g degrees (%s, trim %g), got %r"
@@ -233,7 +247,7 @@ class Robot:
     def load(bus, path):
         """A Robot on bus with the joints that save() wrote to path."""
         joints = {}
-        saved = _load(path, "joints", "Robot.save()")
+        saved = load_json(path, "joints", "Robot.save()")
         if _type(saved) is not dict:
             raise ValueError("%s: joints must be {name: settings}, got %r" % (path, saved))
         for name, settings in saved.items():
@@ -273,7 +287,7 @@ class Robot:
         clamped = 0
         for name, degrees in targets.items():
             i = self._i(name)
-            _number("targets[%r]" % name, degrees)
+            number("targets[%r]" % name, degrees)
             joint = self._joints[i]
             clamped += not joint.lo <= degrees <= joint.hi
             out[i] = joint.position(degrees)
@@ -402,7 +416,7 @@ class Robot:
             degrees = targets[name]
             t = _type(degrees)
             if t is not _int and (t is not _float or not _NINF < degrees < _INF):
-                _number("targets[%r]" % name, degrees)
+                number("targets[%r]" % name, degrees)
             joint = joints[i]
             if degrees < joint.lo or degrees > joint.hi:
                 clamped += 1
@@ -545,7 +559,7 @@ class Sequence:
         for name, degrees in pose.items():
             if _type(name) is not str:
                 raise TypeError("pose's names must be str, got %r" % (name,))
-            _number("pose[%r]" % name, degrees)
+            number("pose[%r]" % name, degrees)
         self.steps.append((dict(pose), _ms("ms", ms)))
 
     def __len__(self):
@@ -559,7 +573,7 @@ class Sequence:
     @staticmethod
     def load(path):
         """The sequence that save() wrote to path."""
-        steps = _load(path, "steps", "Sequence.save()")
+        steps = load_json(path, "steps", "Sequence.save()")
         try:
             steps = [(step["pose"], step["ms"]) for step in steps]
         except (KeyError, TypeError) as e:
@@ -574,7 +588,7 @@ class Sequence:
 
 class Player:
     def __init__(self, robot, sequence, speed=1.0, loop=False):
-        _number("speed", speed, 0)
+        number("speed", speed, 0)
         if not speed:
             raise ValueError("speed must be more than 0, got %r" % (speed,))
         if not sequence.steps:
@@ -626,19 +640,14 @@ class Player:
 
     async def run(self, poll_ms=10):
         """Play to the end (for ever with loop, until stop()), sleeping between poses."""
-        global _asyncio
-        if _asyncio is None:
-            import asyncio as _asyncio
-
-            if not hasattr(_asyncio, "sleep_ms"):  # CPython: busservo_cpython's has it
-                from busservo_cpython import asyncio as _asyncio
+        asyncio = aio()
         while not self.done:
             self.step()
             if not self.done:
                 wait = poll_ms
                 if self._due is not None:
                     wait = min(wait, max(0, time.ticks_diff(self._due, time.ticks_ms())))
-                await _asyncio.sleep_ms(wait)
+                await asyncio.sleep_ms(wait)
 
     def __await__(self):
         return self.run()

@@ -31,6 +31,23 @@ PWM_180: str
 PWM_270: str
 """A PWM servo: 500..2500 us over 270 degrees (-135..135), 1500 at 0."""
 
+CALIBRATION: str
+"""Where a calibration is saved by default, "robot.json", in the folder the program runs from
+(a board's root): Robot.save() writes the joints there, busservo_arm's Arm.save() the links
+beside them, and busservo_board.robot(), the panel and busservo_calibrate use it."""
+
+def aio() -> Any:
+    """The asyncio module, imported when first asked for (on CPython, busservo_cpython's):
+    many robots never need it."""
+
+def load_json(path: str, key: str, saver: str) -> Any:
+    """config[key] of the JSON file at path (saver wrote it), or ValueError naming the file
+    and what is wrong with it (not JSON, or no key)."""
+
+def number(name: str, value: Any, low: float = float("-inf"), high: float = float("inf")) -> float:
+    """value, a finite int or float in low..high; else TypeError or ValueError naming it
+    (name), the range and what came."""
+
 _Pose = Mapping[str, float]
 
 class Joint:

@@ -81,6 +81,8 @@ import json
 import os
 import time
 
+import busservo_motion as bm
+
 try:
     import micropython  # noqa: F401 (on a board; CPython has none)
 except ImportError:  # CPython, on a computer: busservo_cpython gives what it lacks
@@ -103,7 +105,6 @@ _BATTERY_MS = 2000
 _TICK_MS = 10  # the panel's loop: poll the bus, step the stream and the parts
 _ASK_MS = 5  # a query's next step: a byte takes 1 ms at 9600 baud
 _ERROR_MS = 3000  # the loop's last error is shown until this long after it last happened
-CALIBRATION = "robot.json"  # busservo_board.CALIBRATION: the joints, and an arm's links
 _POSITIONS = 21  # busservo.CMD_MULT_SERVO_POS_READ: a reply of positions
 # The parts serve() plugs in: (module, None: at once; or NAME: when /api/NAME is first asked
 # for, or, with a condition, when condition(panel) holds: at the start, or once a
@@ -338,7 +339,7 @@ class Panel:
     and the HTTP side, for serve(); the parts plug into it (attach(panel)). A test may
     drive one directly."""
 
-    def __init__(self, robot, password, arm=None, path=CALIBRATION, page=None, parts=PARTS):
+    def __init__(self, robot, password, arm=None, path=None, page=None, parts=PARTS):
         if type(password) is not str or len(password) < 8:
             # Why, never the password itself: the message may end up in a log or on a screen.
             got = type(password).__name__
@@ -348,7 +349,8 @@ class Panel:
         if arm is not None and arm.robot is not robot:
             raise ValueError("arm must be an Arm on robot")
         self.arm = arm  # the program's Arm to jog, if it gave one (the jog part's)
-        self.path = path  # the calibration file: an arm's links, and where a calibration goes
+        # The calibration file: an arm's links, and where a calibration goes.
+        self.path = path or bm.CALIBRATION
         self.page = page or PAGE
         self.robot = robot
         self.bus = robot.bus
@@ -763,12 +765,13 @@ class Panel:
 
 
 async def serve(
-    robot, password, port=80, arm=None, path=CALIBRATION, host="0.0.0.0", parts=PARTS, page=None
+    robot, password, port=80, arm=None, path=None, host="0.0.0.0", parts=PARTS, page=None
 ):
     """Serve the panel for robot on port, on host's interface (default: every one), until
     cancelled. password: a str of 8 or more characters, which the page asks for. arm: a
     busservo_arm.Arm on robot to jog (default: the one path's links make, if it has them).
-    path: the calibration file (an arm's links, and where the calibration page saves).
+    path: the calibration file (default busservo_motion.CALIBRATION: an arm's links, and
+    where the calibration page saves).
     parts: the parts to plug in, as PARTS gives them (all of them). page: the page's file
     (default: beside this module)."""
     panel = Panel(robot, password, arm, path, page, parts)

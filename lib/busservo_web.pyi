@@ -32,19 +32,17 @@ or the panel fails (out of memory, say) before its answer has begun; 408 when it
 second to send.
 """
 
-from typing import Any, Awaitable, Callable
+from typing import Any, Callable
 
 from busservo import BusServo
 from busservo_arm import Arm
 from busservo_motion import Robot
 
-CALIBRATION: str
-"""The calibration file's default path, "robot.json" (busservo_board.CALIBRATION)."""
 PAGE: str
 """The page's file: busservo_web.html.gz beside this module (else in /lib)."""
-PARTS: tuple[tuple[str, tuple[str, str] | None], ...]
-"""The parts serve() plugs in by default: (module, the route (method, name) that loads it
-when first asked for, or None: at once)."""
+PARTS: tuple[tuple[Any, ...], ...]
+"""The parts serve() plugs in by default: (module, None: at once; or NAME: when /api/NAME is
+first asked for, or, with a condition, when condition(panel) holds)."""
 
 class Refused(Exception):
     """Refused(status, why): a request the panel refuses, its HTTP status, and why (args[0],
@@ -69,16 +67,16 @@ async def serve(
     password: str,
     port: int = 80,
     arm: Arm | None = None,
-    path: str = "robot.json",
+    path: str | None = None,
     host: str = "0.0.0.0",
-    parts: tuple[tuple[str, tuple[str, str] | None], ...] = ...,
+    parts: tuple[tuple[Any, ...], ...] = ...,
     page: str | None = None,
 ) -> None:
     """Serve the panel for robot on port, on every interface (or host's: "127.0.0.1" for
     this machine alone), until cancelled. password: a str of 8 or more characters, which
     the page asks for (ValueError otherwise). arm: an Arm on robot for the page to jog (None:
     the one path's links make, if it has any). path: the calibration file
-    (busservo_board.CALIBRATION by default), which the calibration page saves. parts: the
+    (busservo_motion.CALIBRATION by default), which the calibration page saves. parts: the
     parts to plug in (PARTS by default: all). page: the page's file (default: PAGE)."""
 
 class Panel:
@@ -122,24 +120,28 @@ class Panel:
         robot: Robot,
         password: str,
         arm: Arm | None = None,
-        path: str = "robot.json",
+        path: str | None = None,
         page: str | None = None,
-        parts: tuple[tuple[str, tuple[str, str] | None], ...] = ...,
+        parts: tuple[tuple[Any, ...], ...] = ...,
     ) -> None:
         """arm: an Arm on robot (ValueError if on another) for the jog part. parts: as
         serve() takes them."""
     # What the parts use.
-    def route(self, method: str, name: str, handler: Callable[[Any, str], Awaitable[Any]]) -> None:
-        """Answer method /api/name with await handler(body, token): the answer (JSON), or
-        raise Refused. A POST's body is the dict of its JSON; a GET's is not read."""
     def add(self, part: Any) -> None:
-        """Call part's state(out, token), tick(read) and still(halt), those it has: state adds
-        its keys to the state; tick, each turn of the loop (read: positions came since the
-        last); still, when something else is ordered or the panel disarms (halt: a sequence's
-        pose on the way too)."""
-    def plug(self, module: str, route: tuple[str, str] | None = None) -> None:
-        """Plug in the part of module (module.attach(panel), which returns the part): now,
-        or with route (method, name), when that route is first asked for."""
+        """Call the methods of part, those it has: await get_NAME(body, token) and
+        post_NAME(body, token) answer GET and POST /api/NAME (the answer's JSON, or raise
+        Refused; a POST's body is the dict of its JSON, a GET's is not read); state(out,
+        token) adds its keys to the state; tick(read), each turn of the loop (read: positions
+        came since the last); still(halt), when something else is ordered or the panel
+        disarms (halt: a sequence's pose on the way too); await close(), as serve() ends."""
+    def plug(
+        self, module: str, route: str | None = None, condition: Callable[[Any], Any] | None = None
+    ) -> None:
+        """Plug in the part of module (module.attach(panel), which returns the part): now, or
+        with route (NAME), when /api/NAME is first asked for, or condition(panel) holds (now,
+        or once a calibration is saved)."""
+    def saved(self, key: str) -> bool:
+        """True if the calibration file (path) holds key (as {"key": ...})."""
     def order(self, by: Any = None, halt: bool = False) -> int:
         """A new order, from part by (None: the core): every other part's still(halt); a read
         begun before it is void. Returns its number (orders)."""

@@ -11,7 +11,6 @@ import unittest
 
 import busservo
 import busservo_arm as ba
-import busservo_board
 import busservo_motion as bm
 import wire
 from busservo import CMD_MULT_SERVO_POS_READ, CMD_MULT_SERVO_UNLOAD
@@ -85,7 +84,7 @@ def off_line(p, start, end):
 class Tidy(unittest.TestCase):
     def tearDown(self):
         busservo.time = bm.time = ba.time = time
-        ba._asyncio = None
+        bm._asyncio = None
 
 
 class Geometry(Tidy):
@@ -391,8 +390,8 @@ class Calibration(Tidy):
         self.assertEqual(saved["checked"], "2024-05-01")
         self.assertEqual(saved["links"], LINKS)
 
-    def test_the_default_file_is_the_boards(self):
-        self.assertEqual(ba.CALIBRATION, busservo_board.CALIBRATION)
+    def test_the_default_file_is_the_calibration_every_example_loads(self):
+        self.assertEqual(bm.CALIBRATION, "robot.json")  # one name, busservo_motion's
         w, bus = world()
         folder = scratch("arm")
         os.mkdir(folder)
@@ -622,13 +621,13 @@ class Lines(Tidy):
         a = arm(bus)
         a.move_to(*self.START, pitch=-90, ms=0)
         settle(w, bus, 50)
-        ba._asyncio = SimAsyncio()
+        bm._asyncio = SimAsyncio()  # busservo_motion.aio() gives it to the arm
         ticks = []
 
         async def control_loop():
             while True:
                 ticks.append(w.clock.now_us)
-                await ba._asyncio.sleep_ms(10)
+                await bm._asyncio.sleep_ms(10)
 
         async def main():
             asyncio.create_task(control_loop())

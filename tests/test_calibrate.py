@@ -10,7 +10,6 @@ import unittest
 
 import busservo
 import busservo_arm
-import busservo_board
 import busservo_calibrate as bc
 import busservo_motion as bm
 import wire
@@ -399,15 +398,15 @@ class File(unittest.TestCase):
         self.assertEqual((again["links"], again["note"]), (links, "the blue arm"))
         self.assertEqual(sorted(again["joints"]), sorted(IDS))
 
-    def test_the_default_path_is_the_boards_calibration(self):
+    def test_the_default_path_is_the_calibration_every_example_loads(self):
         calibrate(self.w, self.cal)
-        default = busservo_board.CALIBRATION
+        default = bm.CALIBRATION
         self.assertEqual(default, "robot.json")
-        busservo_board.CALIBRATION = self.path  # here, not in the folder the tests run from
+        bm.CALIBRATION = self.path  # here, not in the folder the tests run from
         try:
             self.cal.save()
         finally:
-            busservo_board.CALIBRATION = default
+            bm.CALIBRATION = default
         self.assertEqual(sorted(bm.Robot.load(self.bus, self.path).names), sorted(IDS))
 
     def test_what_it_cannot_trust_leaves_the_file_as_it_was(self):

@@ -83,6 +83,13 @@ class Peer:
         self._thread = threading.Thread(target=self._run, daemon=True)
         self._thread.start()
 
+    def wait(self, frame, seconds=3):
+        """True once frame has come (the thread reads the pty a few ms behind the command)."""
+        end = time.monotonic() + seconds
+        while frame not in self.frames and time.monotonic() < end:
+            time.sleep(0.005)
+        return frame in self.frames
+
     def close(self):
         self._done.set()
         self._thread.join()
@@ -493,7 +500,7 @@ class ScriptedPeers(WithPeers):
         self.assertEqual(
             out, "servos 1, 2 are limp: turn them by hand; each holds again when moved\n"
         )
-        self.assertEqual(peer.frames[-1], bytes.fromhex("55550514020102"))  # UNLOAD 1, 2
+        self.assertTrue(peer.wait(bytes.fromhex("55550514020102")), peer.frames)  # UNLOAD 1, 2
 
     def test_nothing_moves_until_told(self):
         peer = self.peer()

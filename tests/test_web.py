@@ -1198,13 +1198,13 @@ class AlwaysAnswers(Tidy):
             async def stall(body, token):
                 await asyncio.sleep_ms(5000)
 
-            panel.route("GET", "state", stall)
+            panel._get_state = stall  # (the route's method, for this panel)
             request = b"GET /api/state HTTP/1.0\r\nAuthorization: Bearer %s\r\n\r\n"
             reader, writer = await asyncio.open_connection("127.0.0.1", port)
             line, ms = await answered(reader, writer, request % token.encode())
             self.assertEqual(line, b"HTTP/1.0 503 Service Unavailable\r\n", ms)
             self.assertEqual(panel._clients, 0)
-            panel.route("GET", "state", panel._get_state)
+            del panel._get_state
             status, _ = await http(port, "GET", "/api/state", token=token)
             self.assertEqual(status, 200)
 

@@ -15,6 +15,7 @@ import json
 import sys
 
 import busservo
+import busservo_board
 import busservo_motion as bm
 import busservo_web
 import wire
@@ -25,16 +26,7 @@ sys.path.append("examples")
 def robot(world):
     """The arm of examples/web_panel.py, on world's UART and clock."""
     busservo.time = bm.time = world.clock
-    bus = busservo.BusServo(world.uart)
-    return bm.Robot(
-        bus,
-        {
-            "base": bm.Joint(1),
-            "shoulder": bm.Joint(2, limits=(-90, 90)),
-            "elbow": bm.Joint(3, limits=(-90, 90)),
-            "claw": bm.Joint(4, limits=(0, 60)),
-        },
-    )
+    return bm.Robot(busservo.BusServo(world.uart), busservo_board.joints())
 
 
 class Moves:
