@@ -71,18 +71,22 @@ class AsyncBusServo:
     async def read_battery(self, timeout_ms=100):
         """Battery voltage in mV."""
         async with self._asking:
-            for _ in self.bus.ask(None, timeout_ms):  # checks timeout_ms first
-                await asyncio.sleep_ms(self.poll_ms)
+            await self._ask(None, timeout_ms)
             return self.bus.battery
 
     async def read_positions(self, ids, timeout_ms=None):
         """{servo_id: position} for 1..84 servos; the default timeout is 100 ms
         plus 10 ms per servo."""
         async with self._asking:
-            for _ in self.bus.ask(ids, timeout_ms):
-                await asyncio.sleep_ms(self.poll_ms)
+            await self._ask(ids, timeout_ms)
             positions = self.bus.positions
             return {servo_id: positions[servo_id] for servo_id in ids}
+
+    async def _ask(self, ids, timeout_ms):
+        # The driver's query (ask(): it checks its arguments first), a step every poll_ms;
+        # under _asking, held by the caller until it has read the answer.
+        for _ in self.bus.ask(ids, timeout_ms):
+            await asyncio.sleep_ms(self.poll_ms)
 
     def run_group(self, group, times=1):
         """As BusServo.run_group()."""
