@@ -39,6 +39,7 @@ _MS_MAX = 65535  # a move's time on the wire: 16 bits
 _SCAN = 2  # degrees between the pitches tried when none is given
 _HALVE = 6  # then halved this often: to 1/32 degree
 _HAIR = 0.001  # degrees inside the reach's edge
+_EDGE_MM = 0.01  # reach() puts the wrist this far inside the reach's edge
 _CHECK_MM = 2  # a line is checked every this many mm (and degrees of pitch)
 _CHECKS_MAX = 500
 _DPS = 0.9  # a line plans a joint's speed at most this share of its dps
@@ -168,6 +169,23 @@ class Arm:
         elif not self._plane(r, zz, pitch, True):
             raise ValueError(self._refusal(x, y, z, pitch))
         return {"base": base, "shoulder": self._s, "elbow": self._e, "wrist": self._w}
+
+    def reach(self, x, y, z, pitch):
+        """The tool point nearest x, y, z mm (with the hand at pitch degrees) that the wrist
+        can reach: x, y, z itself if it can, else the one whose wrist is at the reach's edge
+        (a hair inside), on the line from the shoulder's axis. (x, y, z)."""
+        base = math.atan2(y, x) if x or y else (self._at[0] if self._at else 0.0) * _RAD
+        p = pitch * _RAD
+        hr = self._h * math.cos(p)  # the hand, in the arm's plane
+        hz = self._h * math.sin(p)
+        wr = math.sqrt(x * x + y * y) - hr  # the wrist, from the shoulder's axis
+        wz = z - self._b - hz
+        d = math.sqrt(wr * wr + wz * wz)
+        far = self._u + self._f - _EDGE_MM
+        near = abs(self._u - self._f) + _EDGE_MM
+        k = far / d if d > far else near / d if 0 < d < near else 1.0
+        r = wr * k + hr
+        return r * math.cos(base), r * math.sin(base), wz * k + hz + self._b
 
     def _base(self, x, y, z):
         # The base's angle towards x, y (checked), or where it is if x, y is on its axis.

@@ -69,6 +69,10 @@ class Arm:
     def point(self, pose: dict[str, float]) -> tuple[float, float, float, float]:
         """(x, y, z, pitch) of the tool point at pose {name: degrees} of the four joints: the
         forward kinematics (others in pose are ignored)."""
+    def reach(self, x: float, y: float, z: float, pitch: float) -> tuple[float, float, float]:
+        """The tool point nearest x, y, z mm (with the hand at pitch degrees) that the wrist
+        can reach: x, y, z itself if it can, else the one whose wrist is at the reach's edge
+        (a hair inside), on the line from the shoulder's axis."""
     def pose(self, x: float, y: float, z: float, pitch: float | None = None) -> dict[str, float]:
         """{name: degrees} of the four joints that put the tool point at x, y, z mm with the
         hand at pitch (None: the reachable pitch nearest -90, within the limits): the inverse

@@ -4,7 +4,12 @@
 #
 #   POST /api/jog {"axis": "x"|"y"|"z"|"pitch", "by"} -> the state
 # and in the state: "arm" (there is an arm to jog), "no_arm" (why not, in words), "tool"
-# (x, y, z mm and pitch where the joints are) and "jog" (where the jogs are going).
+# (x, y, z mm and pitch where the joints are), "jog" (where the jogs are going) and
+# "jog_note" (the last jog went along the edge of the reach, and how far short).
+#
+# A jog whose line leaves the reach is refused, in busservo_arm's words, and nothing moves;
+# but one that leaves it by at most EDGE_MM goes along its edge: a stretched arm (its rest
+# pose, straight up) can move sideways only so.
 #
 # The arm is the one the program gave serve(), or the one the calibration file's links
 # make. serve() plugs this part in only then (or when a page first jogs, to say why not),
@@ -16,6 +21,7 @@ import busservo_web as web
 JOG_MM_S = 40  # a jog's straight line: the tool point's speed
 JOG_MAX = 100  # mm (or degrees of pitch) a jog may go at once
 AXES = ("x", "y", "z", "pitch")
+EDGE_MM = 2  # a jog that leaves the reach by at most this goes along its edge
 
 
 class Jog:
@@ -24,6 +30,7 @@ class Jog:
         self.line = None  # a jog's busservo_arm.Line on its way
         self.goal = None  # [x, y, z, pitch] the jogs have reached, while jogged is the order
         self.jogged = -1
+        self.note = None  # what the page is told of the last jog (it went along the edge)
         self.robots = panel.robots  # the robot the arm is on
         self.arm = panel.arm
         self.no_arm = None  # why there is no arm to jog
@@ -66,6 +73,7 @@ class Jog:
             out["tool"] = [round(v, 1) for v in arm.point(at)]
         if self.jogged == self.panel.orders:
             out["jog"] = self.goal
+            out["jog_note"] = self.note
 
     def tick(self, read):
         line = self.line
@@ -80,6 +88,22 @@ class Jog:
             self.line.stop()
             self.line = None
             self.panel.robot.hold()
+
+    def _along_the_edge(self, arm, goal):
+        # A jog a hair past the reach (the arm stretched: from its rest pose, any step but
+        # down leaves it): the line to the nearest point the arm reaches, if that is within
+        # EDGE_MM of the goal, and the goal made that point; else None.
+        x, y, z = arm.reach(goal[0], goal[1], goal[2], goal[3])
+        off = ((x - goal[0]) ** 2 + (y - goal[1]) ** 2 + (z - goal[2]) ** 2) ** 0.5
+        if not 0 < off <= EDGE_MM:
+            return None
+        try:
+            line = arm.line_to(x, y, z, goal[3], mm_s=JOG_MM_S)
+        except ValueError:
+            return None
+        self.note = "at the edge of the reach: %.1f mm short of the step" % off
+        goal[0], goal[1], goal[2] = round(x, 1), round(y, 1), round(z, 1)
+        return line
 
     # The route.
 
@@ -103,10 +127,13 @@ class Jog:
                 raise web.Refused(409, "stopped, or moved otherwise, while reading: jog again")
         goal = list(goal)
         goal[AXES.index(axis)] += by
+        self.note = None
         try:
             line = arm.line_to(goal[0], goal[1], goal[2], goal[3], mm_s=JOG_MM_S)
         except ValueError as e:  # out of reach, or past a joint's limits: nothing is sent
-            raise web.Refused(409, "cannot jog there: %s" % e)
+            line = self._along_the_edge(arm, goal)
+            if line is None:
+                raise web.Refused(409, "cannot jog there: %s" % e)
         self.jogged = panel.order(self)  # the stream, or a jog on its way, ends
         self.still(False)
         panel.robot.hold()

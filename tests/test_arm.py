@@ -123,6 +123,20 @@ class Geometry(Tidy):
             self.assertTrue(a["elbow"] > 0 > b["elbow"], (a, b))
             self.assertTrue(near(down.point(b), target, 1e-6))
 
+    def test_reach_gives_the_nearest_point_the_wrist_reaches(self):
+        a = arm(None)
+        inside = (150.0, 20.0, 80.0, -30.0)
+        self.assertEqual(a.reach(*inside), inside[:3])  # in reach: the point itself
+        for x, y, z, pitch in ((300.0, 0.0, 300.0, 0.0), (0.0, 5.0, 423.0, 90.0)):
+            got = a.reach(x, y, z, pitch)
+            pose = a.pose(got[0], got[1], got[2], pitch)  # reachable now
+            self.assertTrue(near(a.point(pose)[:3], got, 1e-6))
+            self.assertTrue(
+                abs(pose["elbow"]) < 2, pose
+            )  # at the edge: the elbow (nearly) straight
+            # and on the line from the shoulder's axis through the point's wrist
+            self.assertTrue(math.atan2(got[1], got[0]) == math.atan2(y, x))
+
     def test_no_pitch_is_the_reachable_pitch_nearest_straight_down(self):
         a = arm(None)
         self.assertTrue(near(a.point(a.pose(150, 0, 40)), (150, 0, 40, -90), 1e-6))

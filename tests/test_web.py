@@ -1894,6 +1894,30 @@ class WhatAUserMet(Tidy):
 
         on_arm(scenario, robot_of=web_world.robot)
 
+    def test_from_the_rest_pose_a_step_sideways_goes_along_the_edge_of_the_reach(self):
+        # At its rest pose the arm is stretched straight up: a step sideways or a turn of
+        # the pitch leaves the reach by a hair, and every jog but down was refused.
+        async def scenario(port, world, robot, path):
+            token = await armed(port)
+            rest = {"base": 0, "shoulder": 0, "elbow": 0, "wrist": 0}
+            await http(port, "POST", "/api/target", {"targets": rest}, token)
+            await polled(port, token, 1600)
+            x, y, z, pitch = (await state(port, token))["tool"]
+            status, reply = await http(port, "POST", "/api/jog", {"axis": "x", "by": 5}, token)
+            self.assertEqual(status, 200, reply)
+            jx, jy, jz, jp = reply["jog"]
+            self.assertEqual((jx, jy, jp), (x + 5, y, pitch))
+            self.assertTrue(z - 1 < jz < z, (jz, z))  # a hair lower: the reach's edge
+            self.assertIn("at the edge of the reach", reply["jog_note"])
+            await polled(port, token, 600)
+            status, reply = await http(port, "POST", "/api/jog", {"axis": "z", "by": -5}, token)
+            self.assertEqual((status, reply["jog_note"]), (200, None), reply)
+            status, reply = await http(port, "POST", "/api/jog", {"axis": "x", "by": 60}, token)
+            self.assertEqual(status, 409, reply)  # far out of reach: refused, as before
+            self.assertIn("out of reach", reply["error"])
+
+        on_arm(scenario)
+
     def test_playing_needs_the_armed_page(self):
         async def scenario(port, world, robot):
             token = await armed(port)
