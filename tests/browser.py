@@ -816,7 +816,7 @@ class ArmPanel(ArmBrowsing):
     def test_1_jog_moves_the_tool_point_a_step_and_refuses_what_it_cannot_reach(self):
         b = self.browser
         self.open_and_log_in()
-        self.assertIsNotNone(until(lambda: b.find_element(By.ID, "jogbox").is_displayed()))
+        self.assertIsNotNone(until(lambda: b.find_element(By.ID, "jog-x+").is_displayed()))
         self.assertFalse(b.find_element(By.ID, "jog-x+").is_enabled())  # not armed
         self.arm()
         x, y, z, pitch = panel_state()["tool"]
