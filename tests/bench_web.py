@@ -7,6 +7,7 @@
 #   sh boards/unix.sh tests/bench_web.py          # prints a Markdown table
 #   sh boards/unix.sh tests/bench_web.py quick    # fewer samples (tests/test_bench_web.py)
 #   sh boards/unix.sh tests/bench_web.py --32bit PATH   # and the heap it needs on a board
+#   sh boards/unix.sh tests/bench_web.py --help         # this text (also -h); runs nothing
 #
 # - page: lib/busservo_web.html.gz as served (goal: 12 KB at most).
 # - RAM, measured on the unix port with gc.mem_alloc() after gc.collect(): what importing
@@ -43,6 +44,31 @@ import busservo
 import busservo_motion as bm
 from shell import free_port, scratch, sh, start, stop, wait_for
 
+
+def arguments(args):
+    """The command line, checked: --help prints this file's header and runs nothing; an
+    argument it does not know gets a usage line (exit status 2), never a traceback."""
+    if "--help" in args or "-h" in args:
+        with open(sys.argv[0]) as f:
+            for line in f:
+                if not line.startswith("#"):
+                    break
+                print(line[2:].rstrip())
+        sys.exit(0)
+    i = 0
+    while i < len(args):
+        if args[i] == "--32bit" and i + 1 < len(args):
+            i += 1  # its PATH
+        elif args[i] != "quick":
+            said = "unknown argument %r" % args[i]
+            if args[i] == "--32bit":
+                said = "--32bit wants a PATH"
+            print("bench_web.py: %s (sh boards/unix.sh tests/bench_web.py --help)" % said)
+            sys.exit(2)
+        i += 1
+
+
+arguments(sys.argv[1:])
 web_world = None  # imported after ram() has measured busservo_web's import
 
 PASSWORD = "bench-pw-1"

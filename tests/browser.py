@@ -19,6 +19,7 @@ import urllib.request
 
 try:
     from selenium import webdriver
+    from selenium.common.exceptions import NoAlertPresentException
     from selenium.webdriver.chrome.service import Service
     from selenium.webdriver.common.action_chains import ActionChains
     from selenium.webdriver.common.by import By
@@ -29,6 +30,7 @@ except ImportError:
 
 CHROMIUM = "/usr/bin/chromium"
 CHROMEDRIVER = "/usr/bin/chromedriver"
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 def _free_ports(n):
@@ -58,26 +60,29 @@ def controller():
         return json.load(r)
 
 
-def panel_state(path="/api/state"):
-    """The panel's /api/state (or another GET), as a second page (logged in here) sees it."""
+def call(path, body=None, token=None):
+    """One request to the panel, as a program (or another page) sends it: its JSON answer.
+    body: sent as JSON (a POST); token: the login's."""
+    request = urllib.request.Request(
+        URL.rstrip("/") + path,
+        data=None if body is None else json.dumps(body).encode(),
+        headers={"Content-Type": "application/json"},
+    )
+    if token:
+        request.add_header("Authorization", "Bearer " + token)
+    with urllib.request.urlopen(request, timeout=5) as r:
+        return json.load(r)
 
-    def call(path, body=None, token=None):
-        request = urllib.request.Request(
-            URL.rstrip("/") + path,
-            data=None if body is None else json.dumps(body).encode(),
-            headers={"Content-Type": "application/json"},
-        )
-        if token:
-            request.add_header("Authorization", "Bearer " + token)
-        with urllib.request.urlopen(request, timeout=5) as r:
-            return json.load(r)
 
+def panel_state(path="/api/state", body=None):
+    """The panel's /api/state (or another GET, or a POST of body), as a second page (logged
+    in here) sees it."""
     global _token
     for _ in range(2):
         if _token is None:
             _token = call("/api/login", {"password": PASSWORD})["token"]
         try:
-            return call(path, token=_token)
+            return call(path, body, _token)
         except urllib.error.HTTPError as e:
             if e.code != 401:
                 raise
@@ -118,14 +123,16 @@ class Browsing(unittest.TestCase):
 
     @classmethod
     def setUpClass(cls):
-        log = cls.log = open(_fresh_dir() + "/web_world.log", "w")
+        # The panel runs in a scratch folder of its own: what it saves (sequences/) is there.
+        cls.folder = _fresh_dir()
+        log = cls.log = open(cls.folder + "/web_world.log", "w")
         cls.server = subprocess.Popen(
             [
                 "sh",
-                "boards/unix.sh",
+                REPO + "/boards/unix.sh",
                 "-X",  # the world keeps each byte its line carried: room for the whole run
                 "heapsize=16M",
-                "tests/web_world.py",
+                REPO + "/tests/web_world.py",
                 "--port",
                 str(PORT),
                 "--password",
@@ -136,6 +143,7 @@ class Browsing(unittest.TestCase):
             ],
             stdout=log,
             stderr=subprocess.STDOUT,
+            cwd=cls.folder,
         )
         ok = until(lambda: _listening(PROBE) and _listening(PORT), 20)
         if ok is None:
@@ -196,18 +204,51 @@ class Browsing(unittest.TestCase):
         return self.browser.find_element(By.ID, "j-" + name)
 
     def arm(self):
-        # On a loaded machine the page's requests can come more than 1 s apart, and the
-        # board's dead-man then disarms it, as it should: the test arms it again.
-        def armed():
-            return panel_state()["armed"] and self.slider("base").is_enabled()
-
+        """Tick the Armed box once: the page and the board both say armed. (One click: a
+        click the page loses is a defect, not something to click again for.) On a loaded
+        machine the page's requests can come more than 1 s apart, and the board's dead-man
+        then disarms it, as it should: armed again only when the page says that was why."""
         box = self.browser.find_element(By.ID, "armed")
-        for _ in range(3):
-            if not box.is_selected():
-                box.click()
+        # The last test's page, closed, is disarmed by the dead-man within 1 s.
+        self.assertIsNotNone(until(lambda: not panel_state()["armed"]), "armed elsewhere")
+
+        def armed():
+            return (
+                panel_state()["armed"] and box.is_selected() and self.slider("base").is_enabled()
+            )
+
+        for _ in range(2):
+            box.click()
             if until(armed, 5.0) is not None:
                 return
-        self.fail("the panel did not arm: %s" % panel_state())
+            if "dead-man" not in self.seen():
+                break
+        self.fail(
+            "the panel did not arm: the box %s, the board says %s, the page %r"
+            % (box.is_selected(), panel_state(), self.seen()[:300])
+        )
+
+    def screen(self, width, height):
+        """Show the page on a screen of width x height CSS pixels (1280 x 800: a laptop's,
+        with a mouse; the default, 390 x 844: a phone's)."""
+        self.browser.execute_cdp_cmd(
+            "Emulation.setDeviceMetricsOverride",
+            {"width": width, "height": height, "deviceScaleFactor": 1, "mobile": width < 600},
+        )
+
+    def answer(self, accept):
+        """Answer the page's question (a confirm()), which must be open: accept it, or not."""
+        alert = self.browser.switch_to.alert  # none open: NoAlertPresentException
+        alert.accept() if accept else alert.dismiss()
+
+    def press_and_confirm(self, element_id):
+        """Press a button that may ask first (Clear with steps, Start calibration), and say
+        yes if it asks."""
+        self.press(element_id)
+        try:
+            self.browser.switch_to.alert.accept()
+        except NoAlertPresentException:
+            pass
 
     def drag(self, name, dx, release=True):
         """Drag joint name's slider's thumb dx pixels from its middle: its value after."""
@@ -221,14 +262,23 @@ class Browsing(unittest.TestCase):
         return float(s.get_attribute("value"))
 
     def in_view(self, element):
-        """element, scrolled to the middle of the screen: scrolled into view at its top (as a
-        drag's press scrolls it), a slider is under the page's sticky title bar, which takes
-        the press (the page is taller than the phone's screen)."""
+        """element, scrolled to the middle of the screen (before a drag or a press): scrolled
+        into view at its top (as a drag's press scrolls it), or left there by the scroll
+        before, it is under the page's sticky title bar, which takes the press (the page is
+        taller than the phone's screen)."""
         self.browser.execute_script("arguments[0].scrollIntoView({block: 'center'})", element)
         return element
 
     def press(self, element_id):
-        self.browser.find_element(By.ID, element_id).click()
+        self.in_view(self.browser.find_element(By.ID, element_id)).click()
+
+    def offline(self, offline=True):
+        """The Wi-Fi drops (offline) or comes back: the page can reach the board, or not."""
+        self.browser.execute_cdp_cmd("Network.enable", {})
+        self.browser.execute_cdp_cmd(
+            "Network.emulateNetworkConditions",
+            {"offline": offline, "latency": 0, "downloadThroughput": -1, "uploadThroughput": -1},
+        )
 
     def text(self, element_id):
         return self.browser.find_element(By.ID, element_id).text
@@ -315,7 +365,7 @@ class Panel(Browsing):
     def test_4_two_poses_recorded_play_back(self):
         self.open_and_log_in()
         self.arm()
-        self.press("clear")
+        self.press_and_confirm("clear")
         first = self.add_pose_at(-50)
         second = self.add_pose_at(50)
         self.assertEqual(len(self.browser.find_elements(By.CSS_SELECTOR, "#steps li")), 2)
@@ -367,12 +417,7 @@ class Panel(Browsing):
         self.open_and_log_in()
         self.arm()
         self.drag("claw", 40)
-        # The Wi-Fi drops: the page can no longer reach the board (nor say goodbye).
-        self.browser.execute_cdp_cmd("Network.enable", {})
-        self.browser.execute_cdp_cmd(
-            "Network.emulateNetworkConditions",
-            {"offline": True, "latency": 0, "downloadThroughput": -1, "uploadThroughput": -1},
-        )
+        self.offline()  # the Wi-Fi drops: the page can no longer reach the board (nor say bye)
         start = time.monotonic()
         took = until(lambda: not panel_state()["armed"], 2.5)
         self.assertIsNotNone(took, "still armed 2.5 s after the connection was lost")
@@ -446,7 +491,7 @@ class Panel(Browsing):
 
     def test_11_an_empty_time_adds_no_pose_in_0_ms(self):
         self.open_and_log_in()
-        self.press("clear")
+        self.press_and_confirm("clear")
         self.assertIsNotNone(until(lambda: panel_state()["steps"] == []))
         self.browser.find_element(By.ID, "ms").clear()
         self.press("add")
@@ -459,7 +504,7 @@ class Panel(Browsing):
         b = self.browser
         self.open_and_log_in()
         self.arm()
-        self.press("clear")
+        self.press_and_confirm("clear")
         seen = self.move_base_to(-40)
         self.press("capture")
         self.assertIsNotNone(until(lambda: b.find_elements(By.ID, "p-base")))
@@ -517,7 +562,7 @@ class Panel(Browsing):
     def test_14_each_slider_shows_its_limits_its_target_and_where_the_joint_is(self):
         b = self.browser
         self.open_and_log_in()
-        self.assertFalse(b.find_element(By.ID, "jogbox").is_displayed())  # no arm: no jog
+        self.assertFalse(b.find_element(By.ID, "jog-x+").is_displayed())  # no arm: no jog
         claw = self.slider("claw").find_element(By.XPATH, "../..")
         self.assertEqual(claw.find_element(By.CLASS_NAME, "lim").text.split(), ["0°", "60°"])
         self.arm()
@@ -546,7 +591,7 @@ class Panel(Browsing):
         b = self.browser
         self.open_and_log_in()
         self.arm()
-        self.press("clear")
+        self.press_and_confirm("clear")
         self.assertIsNotNone(until(lambda: self.step_count() == 0))
         self.move_base_to(30)
         self.press("capture")
@@ -558,6 +603,141 @@ class Panel(Browsing):
         words = self.text("steps").split()
         names = [w for w in words if w in ("base", "shoulder", "elbow", "claw")]
         self.assertEqual(names, ["base", "shoulder", "elbow", "claw"], words)
+
+    # What a user met in the browser (issue 30).
+
+    def test_16_the_arm_requests_answer_decides_not_a_poll_asked_before_it(self):
+        b = self.browser
+        self.open_and_log_in()
+        self.assertIsNotNone(until(lambda: not panel_state()["armed"]))
+        # The next poll is answered at once (not armed: "mine" false), but reaches the page
+        # only once the arm request has been answered: one answer overtaking another, as on
+        # a Wi-Fi. The page arms with that poll on its way.
+        b.execute_script(
+            """
+            const fetch0 = window.fetch;
+            window.race = "next poll";
+            window.fetch = async (url, options) => {
+              const r = await fetch0(url, options);
+              if (String(url).endsWith("/api/arm")) window.armAnswered = true;
+              if (!String(url).endsWith("/api/state") || window.race !== "next poll") return r;
+              window.race = "held";
+              const text = await r.text();
+              window.heldMine = JSON.parse(text).mine;
+              while (!window.armAnswered) await new Promise((ok) => setTimeout(ok, 10));
+              await new Promise((ok) => setTimeout(ok, 100));  // the arm's answer taken
+              window.race = "delivered";
+              return new Response(text, { status: r.status });
+            };
+            """
+        )
+        self.assertIsNotNone(until(lambda: b.execute_script("return window.heldMine === false")))
+        box = b.find_element(By.ID, "armed")
+        box.click()
+        self.assertIsNotNone(until(lambda: b.execute_script("return window.race") == "delivered"))
+        time.sleep(0.5)  # polls asked since, taken
+        self.assertTrue(panel_state()["armed"])
+        self.assertTrue(box.is_selected(), "the box was unticked by a poll asked before arming")
+        self.assertTrue(self.slider("base").is_enabled())
+
+    def test_17_offline_the_page_says_at_once_it_has_no_contact_greyed_and_not_armed(self):
+        b = self.browser
+        self.open_and_log_in()
+        self.arm()
+        self.offline()
+        took = until(lambda: "no contact with the board" in self.seen().lower(), 1.0)
+        self.assertIsNotNone(took, "the page says: %r" % self.seen()[:400])
+        self.assertFalse(b.find_element(By.ID, "armed").is_selected())
+        self.assertFalse(self.slider("base").is_enabled())
+        joints = self.slider("base").find_element(By.XPATH, "ancestor::section")
+        self.assertTrue(float(joints.value_of_css_property("opacity")) < 1)  # greyed
+        self.offline(False)
+        self.assertIsNotNone(until(lambda: "no contact" not in self.seen().lower()))
+        self.assertEqual(float(joints.value_of_css_property("opacity")), 1)
+
+    def test_18_back_in_contact_the_page_says_the_dead_man_disarmed_it(self):
+        self.open_and_log_in()
+        self.arm()
+        self.offline()
+        self.assertIsNotNone(until(lambda: not panel_state()["armed"], 2.5))
+        self.offline(False)
+        self.assertIsNotNone(until(lambda: "no contact" not in self.seen().lower()))
+        self.assertIsNotNone(until(lambda: "dead-man" in self.text("why")), self.seen()[:400])
+        self.assertFalse(self.browser.find_element(By.ID, "armed").is_selected())
+        self.arm()  # arming again: what was said goes
+        self.assertIsNotNone(until(lambda: self.text("why") == ""), self.text("why"))
+
+    def test_19_another_pages_stop_is_named_on_the_armed_page(self):
+        self.open_and_log_in()
+        self.arm()
+        panel_state("/api/estop", {})  # another page's STOP
+        self.assertIsNotNone(until(lambda: "STOP" in self.text("why")), self.seen()[:400])
+        self.assertFalse(self.browser.find_element(By.ID, "armed").is_selected())
+
+    def test_20_a_page_whose_login_other_logins_pushed_out_says_so(self):
+        b = self.browser
+        self.open_and_log_in()
+        for _ in range(4):  # the board keeps the 4 newest logins
+            call("/api/login", {"password": PASSWORD})
+        self.assertIsNotNone(until(lambda: b.find_element(By.ID, "login").is_displayed()))
+        self.assertIsNotNone(
+            until(lambda: "logged out" in self.text("login").lower()),
+            "the login form says: %r" % self.text("login"),
+        )
+
+    def test_21_without_an_arm_the_jog_section_says_why(self):
+        b = self.browser
+        self.open_and_log_in()
+        self.assertIsNotNone(until(lambda: b.find_element(By.ID, "jogbox").is_displayed()))
+        state = panel_state()
+        self.assertIs(state.get("arm"), False, state)
+        self.assertTrue(state.get("no_arm"), state)
+        self.assertIsNotNone(until(lambda: state["no_arm"] in self.text("jogbox")))
+        self.assertFalse(b.find_element(By.ID, "jog-x+").is_displayed())
+
+    def test_22_save_selects_the_name_saved_and_clear_and_load_ask_first(self):
+        b = self.browser
+        self.open_and_log_in()
+        self.arm()
+        self.press_and_confirm("clear")
+        self.assertIsNotNone(until(lambda: self.step_count() == 0))
+        saved = Select(b.find_element(By.ID, "saved"))
+
+        def save_as(name):
+            b.find_element(By.ID, "name").clear()
+            b.find_element(By.ID, "name").send_keys(name)
+            self.press("save")
+            self.assertIsNotNone(until(lambda: "Saved " + name in self.text("seqmsg")))
+            # The list shows the name saved (Load then loads it), not the list's first.
+            shown = until(lambda: saved.first_selected_option.text == name)
+            self.assertIsNotNone(shown, saved.first_selected_option.text)
+
+        self.add_pose_at(-30)
+        save_as("aa-one")  # one step
+        self.add_pose_at(30)
+        save_as("zz-two")  # the list: aa-one, zz-two
+        self.add_pose_at(0)
+        self.assertIsNotNone(until(lambda: self.step_count() == 3))
+        saved.select_by_visible_text("aa-one")
+        self.press("load")  # it replaces the sequence: asked first
+        self.answer(False)
+        self.press("clear")
+        self.answer(False)
+        time.sleep(0.5)
+        self.assertEqual((self.step_count(), len(panel_state()["steps"])), (3, 3))
+        self.press("load")
+        self.answer(True)
+        self.assertIsNotNone(until(lambda: len(panel_state()["steps"]) == 1))
+        self.press("clear")
+        self.answer(True)
+        self.assertIsNotNone(until(lambda: len(panel_state()["steps"]) == 0))
+
+    def test_23_halt_and_limp_say_on_the_page_what_they_do(self):
+        b = self.browser
+        self.open_and_log_in()
+        for button, words in (("limp", "pose the arm by hand"), ("halt", "where they are")):
+            box = b.find_element(By.ID, button).find_element(By.XPATH, "ancestor::section")
+            self.assertIn(words, box.text)  # shown, not a tooltip a phone never shows
 
 
 # An arm to jog and calibrate: base, shoulder, elbow and wrist on servos 1..4, with the links
@@ -578,7 +758,9 @@ HANDS = {1: (512, 140, 880, 560), 2: (488, 200, 800, 440), 3: (500, 150, 860, 54
 HANDS[4] = (530, 180, 880, 480)
 
 
-class ArmPanel(Browsing):
+class ArmBrowsing(Browsing):
+    """The panel of ARM, calibrated in a scratch file, in a browser."""
+
     @classmethod
     def setUpClass(cls):
         cls.file = _fresh_dir() + "/robot.json"
@@ -594,10 +776,10 @@ class ArmPanel(Browsing):
     def hands(self, k, only=(1, 2, 3, 4)):
         turn(*[(i, HANDS[i][k]) for i in only])
 
-    def calibrate(self, still=()):
-        """Start a calibration, and do its three steps by hand (the servos in still not
-        swept); the last button pressed: Nudged."""
-        self.press("calgo")  # Start calibration
+    def sweep(self, still=()):
+        """Start a calibration, hold the rest pose, and sweep the joints (the servos in still
+        not); the last button pressed: Ranges done."""
+        self.press_and_confirm("calgo")  # Start calibration: it asks first
         self.assertIsNotNone(until(lambda: controller()["limp"] == [1, 2, 3, 4]))
         self.hands(0)
         self.assertIsNotNone(until(lambda: self.text("calgo") == "Rest pose held"))
@@ -609,15 +791,32 @@ class ArmPanel(Browsing):
             time.sleep(0.5)  # read a few times meanwhile
         self.assertIn("° seen", self.text("calseen"))
         self.press("calgo")
+
+    def calibrate(self, still=(), unnudged=()):
+        """Start a calibration, and do its three steps by hand (the servos in still not
+        swept, those in unnudged not nudged); the last button pressed: Nudged."""
+        self.sweep(still)
         self.assertIsNotNone(until(lambda: self.text("calgo") == "Nudged"))
-        self.hands(3)
+        self.hands(3, [i for i in (1, 2, 3, 4) if i not in unnudged])
         time.sleep(0.5)
         self.press("calgo")
 
+    def refusals(self, word):
+        """The calibration's refusals shown (in red) that name word."""
+        found = self.browser.find_elements(By.CSS_SELECTOR, "#calmsg:not(.ok), #calseen .bad")
+        return [e.text for e in found if e.text and word in e.text]
+
+    def cal_text(self):
+        """All the calibration's section says."""
+        calgo = self.browser.find_element(By.ID, "calgo")
+        return calgo.find_element(By.XPATH, "ancestor::section").text
+
+
+class ArmPanel(ArmBrowsing):
     def test_1_jog_moves_the_tool_point_a_step_and_refuses_what_it_cannot_reach(self):
         b = self.browser
         self.open_and_log_in()
-        self.assertIsNotNone(until(lambda: b.find_element(By.ID, "jogbox").is_displayed()))
+        self.assertIsNotNone(until(lambda: b.find_element(By.ID, "jog-x+").is_displayed()))
         self.assertFalse(b.find_element(By.ID, "jog-x+").is_enabled())  # not armed
         self.arm()
         x, y, z, pitch = panel_state()["tool"]
@@ -653,20 +852,24 @@ class ArmPanel(Browsing):
         time.sleep(0.8)
         self.assertEqual(controller()["at"], frozen)  # limp: the line sends no more
 
-    def test_3_a_calibration_it_cannot_trust_is_refused_naming_the_joint(self):
+    def test_3_ranges_done_before_a_joint_was_swept_is_refused_naming_it_once(self):
         self.open_and_log_in()
         self.assertIsNotNone(until(lambda: self.text("calstep")))  # the state, shown
         self.assertFalse(self.browser.find_element(By.ID, "calgo").is_enabled())  # not armed
         self.arm()
         moved = controller()["moved"]
-        self.calibrate(still=(3,))
-        self.assertIsNotNone(until(lambda: "cannot calibrate elbow" in self.text("calmsg")))
-
-        def bad():  # the joints the page marks as refused, once it has the board's state
-            found = self.browser.find_elements(By.CSS_SELECTOR, "#calseen .bad")
-            return [e.text.split(":")[0] for e in found]
-
-        self.assertIsNotNone(until(lambda: bad() == ["elbow"]), bad())
+        self.sweep(still=(3,))  # the elbow never swept
+        # Refused, naming the elbow: once, where it belongs.
+        self.assertIsNotNone(until(lambda: self.refusals("elbow")), self.cal_text())
+        time.sleep(0.5)  # the board's state, shown meanwhile
+        self.assertEqual(len(self.refusals("elbow")), 1, self.cal_text())
+        self.assertEqual(self.text("calgo"), "Ranges done")
+        for k in (1, 2, 0):
+            self.hands(k, [3])
+            time.sleep(0.5)
+        self.press("calgo")  # the elbow swept now: taken, and the refusal goes
+        self.assertIsNotNone(until(lambda: self.text("calgo") == "Nudged"), self.cal_text())
+        self.assertEqual(self.refusals(""), [])
         self.press("calcancel")
         self.assertIsNotNone(until(lambda: self.text("calgo") == "Start calibration"))
         self.assertEqual(controller()["moved"], moved)  # nothing moved
@@ -702,6 +905,146 @@ class ArmPanel(Browsing):
         self.assertIsNotNone(until(lambda: controller()["at"] == rest, 3.0), controller())
         self.assertEqual(controller()["limp"], [])
         self.assertIsNotNone(until(lambda: self.text("calgo") == "Start calibration"))
+
+    def test_5_a_refusal_is_said_once_by_its_joint_and_goes_when_the_step_is_taken(self):
+        self.open_and_log_in()
+        self.arm()
+        self.calibrate(unnudged=(3,))  # the elbow not nudged: its direction cannot be told
+        self.assertIsNotNone(until(lambda: self.refusals("elbow")), self.cal_text())
+        time.sleep(0.5)  # the board's state, shown meanwhile
+        self.assertEqual(len(self.refusals("elbow")), 1, self.cal_text())
+        self.assertEqual(self.cal_text().count("too little to tell"), 1, self.cal_text())
+        self.hands(3, [3])  # nudged now
+        time.sleep(0.5)
+        self.press("calgo")
+        self.assertIsNotNone(until(lambda: self.text("calgo") == "Save"), self.cal_text())
+        self.assertEqual(self.refusals(""), [])  # gone, as the step was taken
+        self.press("calcancel")
+        self.assertIsNotNone(until(lambda: self.text("calgo") == "Start calibration"))
+
+    def test_6_start_makes_every_joint_go_limp_so_it_asks_first(self):
+        self.open_and_log_in()
+        self.arm()
+        self.drag("base", 40)
+        self.assertIsNotNone(until(lambda: 1 not in controller()["limp"]))
+        self.press("calgo")  # Start calibration
+        self.answer(False)
+        time.sleep(0.5)
+        self.assertNotIn(1, controller()["limp"])
+        self.assertEqual(
+            (self.text("calgo"), panel_state().get("cal")), ("Start calibration", None)
+        )
+        self.press("calgo")
+        self.answer(True)
+        self.assertIsNotNone(until(lambda: controller()["limp"] == [1, 2, 3, 4]))
+        self.assertIsNotNone(until(lambda: self.text("calgo") == "Rest pose held"))
+        self.press("calcancel")
+
+
+class Jog(ArmBrowsing):
+    """Jogging ARM from where its trims put it (bent: shoulder 30, elbow 60, wrist 60), on a
+    panel of its own: ArmPanel's calibration moves its rest pose."""
+
+    def jogged(self, button, step):
+        """Jog, and wait until the jog's line has played out: the board's targets after."""
+        before = panel_state()["to"]
+        self.jog(button, step)
+        self.assertIsNotNone(until(lambda: panel_state()["to"] != before), self.text("jogmsg"))
+        self.assertIsNotNone(until(lambda: not self.moving(), 5.0))
+        return panel_state()["to"]
+
+    def moving(self):
+        a = controller()["at"]
+        time.sleep(0.3)
+        return controller()["at"] != a
+
+    def thumbs(self):
+        return [float(s.get_attribute("value")) for s in self.sliders()]
+
+    def wrist_by_hand(self, dx):
+        """Drag the wrist's slider dx pixels: the target it sent, once the board has it."""
+        value = self.drag("wrist", dx)
+        self.assertIsNotNone(until(lambda: panel_state()["to"][3] == value))
+        self.assertIsNotNone(until(lambda: not self.moving(), 5.0))
+        return value
+
+    def test_1_after_a_jog_every_thumb_shows_its_target_and_a_key_goes_on_from_there(self):
+        self.screen(1280, 800)  # a laptop: the arrow keys
+        self.open_and_log_in()
+        self.arm()
+        by_hand = self.wrist_by_hand(100)  # (pitch up turns the wrist down)
+        to = self.jogged("jog-pitch+", 25)
+        self.assertTrue(abs(to[3] - by_hand) > 10, (by_hand, to))
+        # Every thumb shows its joint's target, the wrist's too (the slider last moved by
+        # hand): the jog moved it since.
+        self.assertIsNotNone(
+            until(lambda: all(abs(a - b) <= 0.5 for a, b in zip(self.thumbs(), to))),
+            (self.thumbs(), to),
+        )
+        self.slider("wrist").send_keys(Keys.ARROW_LEFT)  # a step (0.5°) from there
+        self.assertIsNotNone(until(lambda: panel_state()["to"][3] != to[3]))
+        self.assertTrue(abs(panel_state()["to"][3] - to[3]) <= 1, (panel_state()["to"], to))
+
+    def test_2_after_a_jog_a_finger_on_the_thumb_goes_on_from_where_it_shows(self):
+        b = self.browser
+        self.open_and_log_in()  # a phone: a finger
+        self.arm()
+        by_hand = self.wrist_by_hand(60)
+        to = self.jogged("jog-pitch-", 25)
+        self.assertTrue(abs(to[3] - by_hand) > 10, (by_hand, to))
+        s = self.in_view(self.slider("wrist"))
+        self.assertIsNotNone(until(lambda: abs(float(s.get_attribute("value")) - to[3]) <= 0.5))
+        # The finger presses where the thumb is shown, and moves it 2 px.
+        f = (to[3] - float(s.get_attribute("min"))) / (
+            float(s.get_attribute("max")) - float(s.get_attribute("min"))
+        )
+        x = round(8 + f * (s.size["width"] - 16) - s.size["width"] / 2)
+        ActionChains(b).move_to_element_with_offset(s, x, 0).click_and_hold().move_by_offset(
+            2, 0
+        ).release().perform()
+        self.assertIsNotNone(until(lambda: panel_state()["to"][3] != to[3]))
+        self.assertTrue(abs(panel_state()["to"][3] - to[3]) <= 2, (panel_state()["to"], to))
+
+    def test_3_a_jogs_refusal_goes_when_a_jog_is_taken(self):
+        self.open_and_log_in()
+        self.arm()
+        for _ in range(12):  # out along x, 25 mm a step, until the arm cannot reach
+            self.jog("jog-x+", 25)
+            if until(lambda: "cannot jog there" in self.text("jogmsg"), 0.8) is not None:
+                break
+        self.assertIn("cannot jog there", self.text("jogmsg"))
+        time.sleep(1.5)  # the last step taken, played out
+        moved = controller()["moved"]
+        self.jog("jog-x-", 25)  # back: taken
+        self.assertIsNotNone(until(lambda: controller()["moved"] > moved))
+        self.assertIsNotNone(until(lambda: self.text("jogmsg") == ""), self.text("jogmsg"))
+
+
+class Logins(Browsing):
+    """Wrong passwords, too many, on a panel of its own: the board then refuses logins from
+    this machine for a while."""
+
+    def test_1_too_many_wrong_passwords_are_answered_in_words(self):
+        from concurrent.futures import ThreadPoolExecutor
+
+        def guess(_):
+            try:
+                call("/api/login", {"password": "a-wrong-guess"})
+            except urllib.error.HTTPError as e:
+                return e.code
+
+        codes = []
+        with ThreadPoolExecutor(4) as pool:
+            while 429 not in codes and len(codes) < 60:  # guesses, 4 at a time
+                codes += pool.map(guess, range(4))
+        self.assertIn(429, codes, "the board never said too many")
+        b = self.browser
+        b.get(URL)
+        b.find_element(By.ID, "pw").send_keys("another-wrong-guess" + Keys.ENTER)
+        self.assertIsNotNone(
+            until(lambda: "too many wrong passwords" in self.text("login").lower()),
+            "the login form says: %r" % self.text("login"),
+        )
 
 
 def _listening(port):

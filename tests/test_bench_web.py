@@ -24,3 +24,19 @@ class Harness(unittest.TestCase):
         self.assertEqual(len(stall), 3, out)  # capturing and streaming; jogging; calibrating
         for row in stall:
             self.assertIn("the event loop ", row, out)
+
+    def test_help_prints_its_usage_and_runs_nothing(self):
+        for option in ("--help", "-h"):
+            ok, out = sh("sh boards/unix.sh tests/bench_web.py " + option)
+            self.assertTrue(ok, out)
+            self.assertIn("sh boards/unix.sh tests/bench_web.py quick ", out)
+            self.assertFalse("| figure |" in out, out)  # no figure measured
+        for args, said in (
+            ("--bogus", "unknown argument '--bogus'"),
+            ("--32bit", "--32bit wants a PATH"),
+        ):
+            ok, out = sh("sh boards/unix.sh tests/bench_web.py " + args)
+            self.assertFalse(ok, out)
+            self.assertEqual(
+                out, "bench_web.py: %s (sh boards/unix.sh tests/bench_web.py --help)\n" % said
+            )
