@@ -5,6 +5,7 @@
 import asyncio
 import json
 import os
+import sys
 import time
 import unittest
 
@@ -2032,6 +2033,68 @@ class WhatAUserMet(Tidy):
             self.assertEqual(robot.clamped, 0)
 
         run(scenario)
+
+
+class Parts(Tidy):
+    # The core and its parts: the worked example of docs/panel.md plugs in, the core imports
+    # no part, and no module of lib/ uses another's private names.
+
+    def test_the_docs_part_that_adds_one_route_plugs_in(self):
+        with open("docs/panel.md") as f:
+            text = f.read()
+        start = text.index("```python", text.index("A part that adds one route")) + 10
+        source = text[start : text.index("```", start)]
+        folder = scratch("part")
+        os.mkdir(folder)
+        with open(folder + "/busservo_web_battery.py", "w") as f:
+            f.write(source)
+        sys.path.insert(0, folder)
+        world = web_world.live()
+        robot = web_world.robot(world)
+        port = free_port()
+        parts = busservo_web.PARTS + (("busservo_web_battery", None),)
+
+        async def main():
+            server = asyncio.create_task(busservo_web.serve(robot, PASSWORD, port, parts=parts))
+            await asyncio.sleep_ms(50)
+            try:
+                token = await login(port)
+                status, reply = await http(port, "GET", "/api/battery", token=token)
+                self.assertEqual((status, reply), (200, {"volts": None}))  # not read yet
+                await polled(port, token, 2400)  # an open page: the battery is read every 2 s
+                status, reply = await http(port, "GET", "/api/battery", token=token)
+                self.assertEqual((status, reply), (200, {"volts": 7.5}))
+                status, reply = await http(port, "GET", "/api/battery")
+                self.assertEqual(status, 401)  # the core's login holds for every part
+            finally:
+                server.cancel()
+                await asyncio.sleep_ms(20)
+
+        try:
+            asyncio.new_event_loop()
+            asyncio.run(main())
+        finally:
+            sys.path.remove(folder)
+            sys.modules.pop("busservo_web_battery", None)
+            sh("rm -rf " + folder)
+
+    def test_the_core_imports_no_part_and_no_module_uses_anothers_private_names(self):
+        with open("lib/busservo_web.py") as f:
+            core = f.read()
+        self.assertFalse("import busservo_web_" in core)
+        modules = [n[:-3] for n in os.listdir("lib") if n.endswith(".py")]
+        found = []
+        for name in modules:
+            with open("lib/%s.py" % name) as f:
+                for number, line in enumerate(f):
+                    code = line.split("#")[0]
+                    for other in modules:
+                        for alias in (other, other.replace("busservo_", "")):
+                            at = code.find(alias + "._")
+                            dunder = code[at + len(alias) + 2 : at + len(alias) + 3] == "_"
+                            if other != name and at >= 0 and not dunder:
+                                found.append("lib/%s.py:%d: %s" % (name, number + 1, line))
+        self.assertEqual(found, [])
 
 
 class Lazy(Tidy):
