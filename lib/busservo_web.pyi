@@ -25,7 +25,7 @@ armed page, reads the rest pose, the ranges and the nudges by hand, refuses by j
 cannot trust, saves the calibration file, and homes at 30 degrees/s only when the page
 confirms. The dead-man and STOP end a jog and a calibration as they end the stream.
 Installed by mip from lib/busservo_web.json, the modules are .mpy: on a 32-bit board the
-panel then serves within a 56 KB heap (from .py source, about 112 KB).
+panel then serves within a 64 KB heap (from .py source, about 104 KB).
 Without the password only the page is served (and /favicon.ico: 204); every other request
 gets 401. Every request is answered, or its connection closed: 503 when too many come at once
 or the panel fails (out of memory, say) before its answer has begun; 408 when it takes over a

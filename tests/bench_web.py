@@ -443,7 +443,8 @@ def ram32():
     folder = install("mpy")
     measure = (
         "import gc;gc.collect();a=gc.mem_alloc()\n"
-        'for m in ("asyncio", "busservo", "busservo_motion", "busservo_web"):\n'
+        'for m in ("asyncio", "busservo", "busservo_motion", "busservo_web",\n'
+        '  "busservo_web_sliders", "busservo_web_teach"):\n'
         " __import__(m);gc.collect();b=gc.mem_alloc();print(m,b-a);a=b"
     )
     try:
