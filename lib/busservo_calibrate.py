@@ -127,19 +127,18 @@ class Calibration:
 
     def problems(self):
         """{name: why} of each joint the steps so far cannot calibrate (none: {})."""
-        out = {}
-        for i, name in enumerate(self.names):
-            why = self._problem(i)
-            if why:
-                out[name] = why
-        return out
+        return self._by_joint(self._problem)
 
     def unswept(self):
         """{name: why} of each joint whose range seen in step 2 is too small to calibrate
         (none: {}): the sweep is not done."""
+        return self._by_joint(self._sweep_problem)
+
+    def _by_joint(self, problem):
+        # {name: why} of each joint i for which problem(i) says why.
         out = {}
         for i, name in enumerate(self.names):
-            why = self._sweep_problem(i)
+            why = problem(i)
             if why:
                 out[name] = why
         return out

@@ -12,6 +12,9 @@
 #                       MicroPython's does (not as \u escapes)
 #   bytearray8(n)       a bytearray that keeps the low 8 bits of what it is given
 #   awaitable(cls)      makes `await obj` run obj.run(), as MicroPython's does
+#   written(buf, ...)   what a UART's write(buf), write(buf, n) or write(buf, off, n) writes
+#   UART                a base for a computer's port: read(), deinit() and `with`, made of its
+#                       any(), readinto() and close()
 #
 # Ticks wrap at 2**30, as on a 32-bit board: ticks_diff() and ticks_add() are MicroPython's.
 # json, and asyncio with what goes with it (async_sleep_ms, wait_for_ms, Stream,
@@ -59,6 +62,37 @@ def awaitable(cls):
 
     cls.__await__ = cls.__iter__ = __await__
     return cls
+
+
+# The stream protocol, as MicroPython's UART methods take it (the computer's ports: serial, HID).
+
+
+def written(buf, off=None, nbytes=None):
+    """The bytes that write(buf), write(buf, n) or write(buf, off, n) write: a memoryview of
+    buf."""
+    if nbytes is None:
+        return memoryview(buf)[: off if off is not None else len(buf)]
+    return memoryview(buf)[off : off + nbytes]
+
+
+class UART:
+    """What a computer's port (serial, HID) needs besides any(), readinto(), write() and
+    close() to be used as MicroPython's machine.UART is: read(), deinit() and `with`."""
+
+    def read(self, nbytes=-1):
+        """bytes that have come (at most nbytes), or None when none has."""
+        buf = bytearray(self.any() if nbytes < 0 else nbytes)
+        got = self.readinto(buf) if buf else 0
+        return bytes(buf[:got]) if got else None
+
+    def deinit(self):
+        self.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
 
 
 # time, with MicroPython's ticks.

@@ -41,6 +41,8 @@ import errno
 import os
 import sys
 
+import busservo_cpython
+
 VID = 0x0483  # STMicroelectronics' vendor id, which these controllers use
 PID = 0x5750
 REPORT = 64  # bytes of a report, each way; written behind its report id, 0
@@ -163,7 +165,7 @@ def hid_port(port="hid"):
     return HidUART(device, port)
 
 
-class HidUART:
+class HidUART(busservo_cpython.UART):
     """A hidapi device with machine.UART's any/read/readinto/write, as the driver uses
     them: reports in, a byte stream out, and back."""
 
@@ -240,21 +242,12 @@ class HidUART:
         del self._in[:got]
         return got or None
 
-    def read(self, nbytes=-1):
-        buf = bytearray(self.any() if nbytes < 0 else nbytes)
-        got = self.readinto(buf) if buf else 0
-        return bytes(buf[:got]) if got else None
-
     # Writing: bytes gather until they make a whole frame, by its Length byte; each frame
     # goes as one report. Bytes that start no frame go as they are, a report of their own
     # (the controller drops them, as it drops a serial line's noise).
 
     def write(self, buf, off=None, nbytes=None):
-        # write(buf), write(buf, n), write(buf, off, n): MicroPython's stream write().
-        if nbytes is None:
-            data = memoryview(buf)[: off if off is not None else len(buf)]
-        else:
-            data = memoryview(buf)[off : off + nbytes]
+        data = busservo_cpython.written(buf, off, nbytes)  # MicroPython's stream forms
         self._open()
         if not data:
             return 0
@@ -297,14 +290,6 @@ class HidUART:
                 device.close()
             except Exception:
                 pass
-
-    deinit = close
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
 
     def __repr__(self):
         return "<busservo_hid.HidUART %s>" % self.port

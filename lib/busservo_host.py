@@ -20,6 +20,8 @@ import os
 import sys
 import time
 
+import busservo_cpython
+
 BAUDRATE = 9600
 
 
@@ -72,7 +74,7 @@ def _open_error(path, e):
     return OSError(code, "could not open %s: %s" % (path, e))
 
 
-class SerialUART:
+class SerialUART(busservo_cpython.UART):
     """A pyserial port with machine.UART's any/read/readinto/write, as the driver uses them."""
 
     def __init__(self, port, path):
@@ -102,17 +104,8 @@ class SerialUART:
         buf[:got] = data
         return got or None
 
-    def read(self, nbytes=-1):
-        buf = bytearray(self.any() if nbytes < 0 else nbytes)
-        got = self.readinto(buf) if buf else 0
-        return bytes(buf[:got]) if got else None
-
     def write(self, buf, off=None, nbytes=None):
-        # write(buf), write(buf, n), write(buf, off, n): MicroPython's stream write().
-        if nbytes is None:
-            data = memoryview(buf)[: off if off is not None else len(buf)]
-        else:
-            data = memoryview(buf)[off : off + nbytes]
+        data = busservo_cpython.written(buf, off, nbytes)  # MicroPython's stream forms
         if not data:
             return 0
         try:
@@ -134,14 +127,6 @@ class SerialUART:
             self._port.close()
         except Exception:
             pass
-
-    deinit = close
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
 
     def __repr__(self):
         return "<busservo_host.SerialUART %s>" % self.path
