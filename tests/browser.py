@@ -19,7 +19,7 @@ import urllib.request
 
 try:
     from selenium import webdriver
-    from selenium.common.exceptions import NoAlertPresentException
+    from selenium.common.exceptions import NoAlertPresentException, StaleElementReferenceException
     from selenium.webdriver.chrome.service import Service
     from selenium.webdriver.common.action_chains import ActionChains
     from selenium.webdriver.common.by import By
@@ -27,6 +27,9 @@ try:
     from selenium.webdriver.support.ui import Select
 except ImportError:
     webdriver = None  # main() says so, and skips
+
+    class StaleElementReferenceException(Exception):
+        pass
 
 CHROMIUM = "/usr/bin/chromium"
 CHROMEDRIVER = "/usr/bin/chromedriver"
@@ -94,11 +97,15 @@ _token = None
 
 
 def until(test, seconds=3.0):
-    """Wait until test() is true; return how long it took (s), or None."""
+    """Wait until test() is true; return how long it took (s), or None. An element the page
+    made anew while test() read it is read again."""
     start = time.monotonic()
     while time.monotonic() - start < seconds:
-        if test():
-            return time.monotonic() - start
+        try:
+            if test():
+                return time.monotonic() - start
+        except StaleElementReferenceException:
+            pass
         time.sleep(0.02)
     return None
 
@@ -804,9 +811,16 @@ class ArmBrowsing(Browsing):
         self.press("calgo")
 
     def refusals(self, word):
-        """The calibration's refusals shown (in red) that name word."""
-        found = self.browser.find_elements(By.CSS_SELECTOR, "#calmsg:not(.ok), #calseen .bad")
-        return [e.text for e in found if e.text and word in e.text]
+        """The calibration's refusals shown (in red) that name word. (The page makes the
+        section's lines anew at each state it polls: one read between two is read again.)"""
+        for _ in range(20):
+            css = "#calmsg:not(.ok), #calseen .bad"
+            try:
+                found = self.browser.find_elements(By.CSS_SELECTOR, css)
+                return [e.text for e in found if e.text and word in e.text]
+            except StaleElementReferenceException:
+                time.sleep(0.05)
+        raise AssertionError("the calibration's lines never held still for a read")
 
     def cal_text(self):
         """All the calibration's section says."""
