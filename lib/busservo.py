@@ -42,6 +42,8 @@ _TIMEOUT_MAX_MS = const(60000)
 _LATE_MS = const(100)  # how long after its query gave up a reply may still come
 _FORGET_MS = const(1000)  # a query listens first for a reply given up on up to this long ago
 _GAP_MS = const(20)  # a frame's bytes come closer together than this, FIFOs and all
+_BURST_MS = const(3)  # back to back replies come closer together than this (no FIFO)
+_LINGER_MS = const(10)  # a peer faster than the wire sends a reply right behind another so
 _TICKS = const(0x3FFFFFFF)  # ticks modulo 2**30, as a 32-bit port's wrap
 _HALF = const(0x20000000)  # half of that: a later time, or an earlier one
 _AHEAD_MS = const(40000)  # more ahead than this: ticks came round (rp2's largest txbuf: 34 s)
@@ -68,9 +70,7 @@ def _count(name, items, high):
     try:
         n = len(items)
     except TypeError:  # not a sequence at all (one id, say): show it as one
-        raise TypeError(
-            "%s must be a list of 1..%d items, such as [%r], got %r" % (name, high, items, items)
-        )
+        raise TypeError("%s must be a list, such as [%r], got %r" % (name, items, items))
     if not 1 <= n <= high:
         raise ValueError("%s must be a list of 1..%d items, got %d of them" % (name, high, n))
     return n
@@ -110,10 +110,13 @@ class BusServo:
         # on (see ask()); then [battery, positions]: when (ticks_ms) the last
         # request of each kind has left the wire, and the last of those given up
         # on; then [battery, positions]: 1 if a reply that fits the request in
-        # flight came too soon for it and was taken for a late one (see _apply).
-        # And the ids of the positions asked last, with a bit for each count of
-        # ids a positions request in flight asked for.
-        self._waiting = [0, 0, 0, 0, 0, 0, 0, 0, 0, 0]
+        # flight came too soon for it and was taken for a late one (see _apply);
+        # then [battery, positions]: the peer's pace, as the last reply that
+        # answered a request of that kind (the only one in flight) showed it: 1
+        # sooner than the wire allows, 0 not, 2 none yet. And the ids of the
+        # positions asked last, with a bit for each count of ids a positions
+        # request in flight asked for.
+        self._waiting = [0] * 10 + [2, 2]
         self._asked = bytearray(96)  # count, ids; from 85, bit n of 85..95: n ids (1..84)
         self.noise = 0  # bytes read that were no frame of the controller's
         self.lost = 0  # frames not held because the queue was full
@@ -237,7 +240,6 @@ class BusServo:
                 for i in range(n + 1):
                     asked[i] = tx[4 + i]  # the count and the ids, as sent
             waiting[kind] += 1
-            waiting[kind + 8] = 0
 
     def _group_cmd(self, cmd, group, name, value):
         _check("group", group, 0, 0xFF)
@@ -373,8 +375,12 @@ class BusServo:
             self._finish()  # a request cut short goes first: its reply is waited out
         start = time.ticks_add(time.ticks_ms(), self.wire_ms())  # when the wire is free
         # Those given up on long ago are not listened for (their replies were likely lost),
-        # but still counted: a reply too soon for this query may be one of them.
-        gone = (start - waiting[kind + 6]) & _TICKS > _FORGET_MS
+        # but still counted: a reply too soon for this query may be one of them. Those of
+        # either kind are: the controller answers in turn, and a burst of late replies of
+        # the other kind may hold this kind's behind it.
+        given = (waiting[2] and (start - waiting[6]) & _TICKS <= _FORGET_MS) or (
+            waiting[3] and (start - waiting[7]) & _TICKS <= _FORGET_MS
+        )
         while True:  # decode what has come first: none of it answers this query
             got = self._next_frame()
             self._hold(got)
@@ -390,7 +396,7 @@ class BusServo:
                 break
             if got is None:
                 if (
-                    not (waiting[kind] or waiting[kind + 2] and not gone)
+                    not (waiting[kind] or given)
                     or not waiting[kind]
                     and waited > _GAP_MS
                     and time.ticks_diff(now, self._heard) > _GAP_MS
@@ -410,6 +416,7 @@ class BusServo:
             self.request_positions(ids)  # checks the ids
         else:
             self.request_battery()
+        waiting[kind + 8] = 0  # (another task's request must not clear it: not in _went)
         # Its reply is due within timeout_ms of the request leaving the wire.
         deadline = time.ticks_add(time.ticks_ms(), self.wire_ms() + timeout_ms)
         late = 0  # frames decoded since the deadline: one last look, then give up
@@ -418,19 +425,48 @@ class BusServo:
                 late += 1
             got = self._next_frame()
             if not waiting[kind]:
-                return  # the reply: it matched the request
+                break  # the reply: it matched the request
+            self._hold(got)
             if got is None and late or late > _QUEUE:
-                if waiting[kind + 8]:
+                if waiting[kind + 8] and waiting[kind + 10]:
                     # A reply that fits came too soon and was taken for a late one, and
-                    # none came after it: it was this one (and the late ones were lost,
-                    # as the controller answers in turn). A peer faster than the wire.
+                    # none came after it, from a peer not known to be as slow as the
+                    # wire: it was this one (and the late ones were lost, as the
+                    # controller answers in turn). It is no event: taken back from
+                    # poll()'s, if it is the last held.
                     waiting[kind] = waiting[kind + 2] = 0
+                    waiting[kind + 10] = 1
                     self.early += 1
+                    got = self._queued - 1
+                    if got >= 0 and self._queue[got] == (kind and 21 or 15):  # its command
+                        self._queued = got
                     return
                 raise OSError(errno.ETIMEDOUT, "no reply")
             if got is None:
                 yield
+        # Linger while replies keep coming (until the line has been quiet for `quiet` ms,
+        # or _GAP_MS at most; what comes is an event, the state holds the last): with
+        # a peer faster than the wire, whose timing cannot tell a late reply from the
+        # answer, one right behind this one would be this query's own, and this one an
+        # earlier request's; with some given up on, a burst of late ones may be coming
+        # (the controller answers in turn, both kinds) and this one its first, which the
+        # next query may not listen for (two bytes' time tells).
+        answered = time.ticks_ms()
+        quiet = _LINGER_MS
+        if waiting[kind + 10] != 1:
+            if not (waiting[2] or waiting[3]):
+                return
+            quiet = _BURST_MS
+        while True:
+            got = self._next_frame()
             self._hold(got)
+            now = time.ticks_ms()
+            if got is None and time.ticks_diff(now, self._heard) >= quiet:
+                return
+            if time.ticks_diff(now, answered) > _GAP_MS:
+                return
+            if got is None:
+                yield
 
     def _hold(self, cmd):
         # Keep a frame that came during a query for poll(); its state is applied.
@@ -587,13 +623,15 @@ class BusServo:
                 self.battery = rx[f + 4] | rx[f + 5] << 8
             # It answers the oldest request of its kind in flight if it fits it and came in
             # time for it, or sooner with none given up on: then nothing else can be its
-            # answer, and the peer is faster than baudrate says (counted in early). If it
-            # does not answer that, it answers an older one in flight, if there is one, or
-            # else one a query gave up on (one that fits may still be the query's: ask()).
+            # answer, and the peer is faster than baudrate says (counted in early; its pace
+            # kept, see ask()). If it does not answer that, it answers an older one in
+            # flight, if there is one, or else one a query gave up on (one that fits may
+            # still be the query's: ask()).
             if waiting[kind] and (fits and not (early and waiting[kind + 2]) or waiting[kind] > 1):
+                if waiting[kind] == 1:  # the last request's answer: the peer's pace
+                    waiting[kind + 10] = early
+                    self.early += early
                 waiting[kind] -= 1
-                if early and fits:
-                    self.early += 1
             elif waiting[kind + 2]:
                 waiting[kind + 2] -= 1
                 waiting[kind + 8] = waiting[kind] and fits

@@ -31,6 +31,7 @@ except ImportError:
     class StaleElementReferenceException(Exception):
         pass
 
+
 CHROMIUM = "/usr/bin/chromium"
 CHROMEDRIVER = "/usr/bin/chromedriver"
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))

@@ -53,20 +53,20 @@ MPY="test_commands test_sim test_async test_motion test_arm test_calibrate test_
 # binding with nothing plugged in), which run on CPython only (CPY_ONLY). test_wire and
 # test_soak look at the world's own heap and its MicroPython-style asyncio: not on CPython.
 CPY="test_frames test_commands test_queries test_sim test_reliability test_async test_motion"
-CPY="$CPY test_arm test_calibrate test_web test_host test_hid"
+CPY="$CPY test_arm test_calibrate test_web test_host test_hid test_adversarial"
 CPY_ONLY="test_host test_hid"
 # The longest modules start first, so that the short ones fill the other cores meanwhile and
 # the run ends soon after its longest module does (in the order of their times, measured).
 SLOW="test_soak test_browser test_examples test_web test_board test_host test_reliability"
 SLOW="$SLOW test_install"
 SLOW="$SLOW test_e2e"
-SLOW="$SLOW test_scripts test_bench_web test_arm test_docs"
+SLOW="$SLOW test_scripts test_bench_web test_arm test_docs test_adversarial"
 # The modules on simulated time alone (tests/wire.py's clock: nothing real is waited for) run
 # at a lower priority (nice 10): they lose nothing by waiting for a core, and the modules on
 # real time beside them (the web panel, the browser, the pty, the examples), which can, get
 # one first. test_soak (a day of the panel) takes most of the suite's CPU time.
 NICE="test_reliability test_soak test_wire test_motion test_arm test_calibrate test_bench_motion"
-NICE="$NICE test_bench_arm"
+NICE="$NICE test_bench_arm test_adversarial"
 CODE="lib tests examples boards"
 COUNTS="tests/run.sh-counts:"  # the last line of a module's run: tests run, failed, skipped
 
