@@ -77,6 +77,10 @@ MODULES = {
     ],
     "busservo_motion": ["test_motion", "test_arm"],  # the arm's lines stream through it
     "busservo_web": ["test_web"],
+    "busservo_web_sliders": ["test_web"],
+    "busservo_web_teach": ["test_web"],
+    "busservo_web_jog": ["test_web"],
+    "busservo_web_calibrate": ["test_web"],
     "busservo_arm": ["test_arm"],
     "busservo_calibrate": ["test_calibrate"],
     "examples/calibrate": ["test_calibrate", "test_examples"],
@@ -773,6 +777,10 @@ MUTANTS = {
             "Player.stop() does not stop it",
         ),
     ],
+    # The panel's core (issue 30: HTTP, sessions, arming, the dead-man, STOP, the state, the
+    # loop). The mutants of the single module it was, ported where their code now lives
+    # (each keeps its name and the bug a user would meet); those of the parts' code are in
+    # the parts' lists below.
     "busservo_web": [
         (
             "same-prefix-passes",
@@ -794,25 +802,25 @@ MUTANTS = {
         ),
         (
             "sessions-unbounded",
-            "        if len(self._sessions) > _SESSIONS:",
-            "        if len(self._sessions) > 10 * _SESSIONS:",
+            "        if len(sessions) > _SESSIONS:",
+            "        if len(sessions) > 10 * _SESSIONS:",
             "logins are never forgotten: an old token drives for ever, the RAM fills",
         ),
         (
             "no-login-needed",
             "                if session is None:\n"
-            '                    raise _Refused(401, "log in first")',
-            "                if session is None:\n                    session = [None, 0]",
+            '                    raise Refused(401, "log in first")',
+            "                if session is None:\n                    session = [None, 0, None]",
             "anyone on the Wi-Fi drives the robot without the password",
         ),
         (
             "state-without-login",
             "                if session is None:\n"
-            '                    raise _Refused(401, "log in first")',
+            '                    raise Refused(401, "log in first")',
             '                if session is None and name == "state":\n'
-            "                    session = [None, 0]\n"
+            "                    session = [None, 0, None]\n"
             "                elif session is None:\n"
-            '                    raise _Refused(401, "log in first")',
+            '                    raise Refused(401, "log in first")',
             "the robot's state is served without the password",
         ),
         (
@@ -822,65 +830,44 @@ MUTANTS = {
             "passwords can be guessed as fast as the board answers",
         ),
         (
-            "any-page-drives",
+            "any-page-drives",  # now in driving(), which every part's route calls
             "        if self.armed != token:",
             "        if self.armed is None:",
             "a page that did not arm drives the robot while another holds it armed",
         ),
         (
-            "target-limits-unchecked",
-            '_need(pose, name, float, joint.lo, joint.hi, "%s[%r]" % (what, name))',
-            '_need(pose, name, float, None, None, "%s[%r]" % (what, name))',
+            "target-limits-unchecked",  # now in pose(), which the parts call
+            'need(pose, name, float, joint.lo, joint.hi, "%s[%r]" % (what, name))',
+            'need(pose, name, float, None, None, "%s[%r]" % (what, name))',
             "a target beyond a joint's limits gets 200 (and is clamped), not 400",
-        ),
-        (
-            "target-while-playing",
-            "        self._driver(token)\n        self._not_playing()",
-            "        self._driver(token)",
-            "a slider drag during playback fights the sequence",
         ),
         (
             "arm-steals",
             "            if self.armed not in (None, token):\n"
-            '                raise _Refused(409, "another page has the panel armed")',
+            '                raise Refused(409, "another page has the panel armed")',
             "            if False:\n"
-            '                raise _Refused(409, "another page has the panel armed")',
+            '                raise Refused(409, "another page has the panel armed")',
             "a second page arms over the first: two pages drive",
         ),
         (
+            # The stream's end is now each part's still() (the sliders': hold()), called by
+            # disarm()'s order(), and disarm()'s own hold(): this is the core's half;
+            # sliders-still-keeps-stream (busservo_web_sliders) is the other.
             "disarm-keeps-stream",
-            "        self.armed = None\n        self.robot.hold()",
-            "        self.armed = None",
+            "        self.order(halt=halt)\n        self.robot.hold()",
+            "        self.order(halt=halt)",
             "targets not yet sent still go after disarming",
         ),
         (
-            "disarm-keeps-playing",
-            "        self.robot.hold()\n        self.stop(halt)",
-            "        self.robot.hold()",
-            "disarming (or the dead-man) leaves the sequence playing",
-        ),
-        (
-            "stop-halt-inverted",
-            "            if halt:\n                names = set()",
-            "            if not halt:\n                names = set()",
-            "STOP lets the pose on its way go on; estop reads and moves before going limp",
-        ),
-        (
-            "stop-no-halt-move",
-            "                self.robot.move(pose, ms=_HALT_MS)",
-            "                pass",
-            "STOP mid-pose lets the joints go on to the pose",
-        ),
-        (
             "estop-not-limp",
-            "        self.limp = True\n        self.robot.estop()",
-            "        self.limp = True",
+            "        self.to = {}\n        self.robot.estop()",
+            "        self.to = {}",
             "the emergency stop does not stop the robot",
         ),
         (
             "estop-reads-first",
-            "        self.disarm(halt=False)  # at once: the joints go limp",
-            "        self.disarm()",
+            "        self.disarm(halt=False, why=why)",
+            "        self.disarm(why=why)",
             "estop mid-sequence reads the positions first: a controller that does not "
             "answer leaves the joints stiff",
         ),
@@ -892,17 +879,9 @@ MUTANTS = {
         ),
         (
             "dead-man-off",
-            "                if token == self.armed and time.ticks_diff(now, seen) > _DEAD_MS:\n"
-            "                    self.disarm()",
-            "                if token == self.armed and time.ticks_diff(now, seen) > _DEAD_MS:\n"
-            "                    pass",
+            "                    self.disarm(why=",
+            "                    None and self.disarm(why=",
             "a page whose connection died drives for ever",
-        ),
-        (
-            "player-never-done",
-            "            if self.player.done:\n                self.player = None",
-            "            if self.player.done:\n                pass",
-            "after a sequence ends, the panel says it is playing and refuses the sliders",
         ),
         (
             "reads-over-the-stream",
@@ -912,10 +891,8 @@ MUTANTS = {
         ),
         (
             "tick-error-keeps-playing",
-            "                try:\n"
-            "                    self.stop()\n"
-            "                except Exception:",
-            "                try:\n                    pass\n                except Exception:",
+            "                    self.order(halt=True)  # a sequence stops where the joints are",
+            "                    pass",
             "a failure in the panel's loop leaves the sequence playing",
         ),
         (
@@ -945,24 +922,6 @@ MUTANTS = {
             "                    if not reading[i][1].heard:",
             "                    if reading[i][1].heard:",
             "silent connections push out the page's request on its way",
-        ),
-        (
-            "name-any-chars",
-            "        or not all(c in _NAME_CHARS for c in name)\n",
-            "",
-            "a sequence name ../x writes outside sequences/",
-        ),
-        (
-            "remove-past-the-end",
-            '        return _need(body, "index", int, 0, len(steps) - 1)',
-            '        return _need(body, "index", int, 0, len(steps))',
-            "removing the step past the last gets a 500, not a 400",
-        ),
-        (
-            "speed-unlimited",
-            '_need(body, "speed", float, 0.1, 10)',
-            '_need(body, "speed", float, 0.1, 1000)',
-            "playback at 1000x: every pose at once",
         ),
         (
             "mine-for-everyone",
@@ -1034,7 +993,7 @@ MUTANTS = {
         ),
         (
             "failure-no-503",
-            "            if not (conn and conn.sent):",
+            "            if not (gone or conn and conn.sent):",
             "            if False:",
             "a request that fails (out of memory) before its answer is closed with none",
         ),
@@ -1069,11 +1028,11 @@ MUTANTS = {
             "HEAD / sends the page's body too",
         ),
         (
-            "where-blocks",
-            "            for _ in self.bus.ask(ids):\n"
+            "where-blocks",  # now in positions(), which where() and the parts' reads use
+            "            for _ in bus.ask(ids):\n"
             "                await asyncio.sleep_ms(_ASK_MS)\n"
-            "            robot.bus = _Known(self.bus.positions)",
-            "            robot.bus = self.bus",
+            "            return {i: bus.positions.get(i) for i in ids}",
+            "            return bus.read_positions(ids)",
             "arm, capture and add read positions with a blocking query: the stream, the "
             "dead-man and every page stop meanwhile",
         ),
@@ -1090,24 +1049,393 @@ MUTANTS = {
             "the panel's own reads go out while a route's query waits: it waits longer",
         ),
         (
+            "arm-race-unchecked",
+            "            if self.orders != orders or self.armed not in (None, token):",
+            "            if False:",
+            "a stop, or another page's arming, while arming is reading is ignored: two pages "
+            "armed",
+        ),
+        # New with the restructure (issue 30): the parts' hooks, the login's JSON, the
+        # limits on wrong passwords, the sessions, the state's "lost".
+        (
+            "order-stops-no-part",
+            "                part.still(halt)",
+            "                pass",
+            "a drag, a jog, a sequence or STOP leaves what another part drives going on: a "
+            "sequence plays on after disarming, a jog's line goes on under a drag",
+        ),
+        (
+            "disarm-stops-no-part",
+            "        self.armed = None\n        self.order(halt=halt)",
+            "        self.armed = None\n        self.orders += 1",
+            "disarming, the dead-man and STOP leave a sequence playing, a jog going and a "
+            "calibration under way",
+        ),
+        (
+            "driving-ignores-busy",
+            "        if self.busy and self.busy[0] is not by:",
+            "        if False:",
+            "a drag, a jog or a calibration is taken while a sequence plays: they fight",
+        ),
+        (
+            "driving-busy-refuses-its-holder",
+            "        if self.busy and self.busy[0] is not by:",
+            "        if self.busy:",
+            "a calibration under way refuses its own next step: it can never end but by cancel",
+        ),
+        (
+            "lazy-part-never-loaded",
+            "                        self.plug(self._later.pop(name))",
+            "                        pass",
+            "the calibration page (and a jog with no arm) gets 404: it is never loaded",
+        ),
+        (
+            "lazy-part-not-loaded-on-adopt",
+            "                self.plug(module)  # what the new calibration file calls for",
+            "                pass",
+            "after a calibration saved with links, the page offers no jog until one is asked for",
+        ),
+        (
+            "lazy-part-loaded-at-start",
+            "        if route and not (condition and condition(self)):",
+            "        if False:",
+            "a panel without an arm imports the jog and the calibration page (and "
+            "busservo_arm, busservo_calibrate): their RAM is lost to the robot's program",
+        ),
+        (
+            "state-skips-parts",
+            "                part.state(out, token)",
+            "                pass",
+            "the state has no steps, no playing, no jog, no calibration: the page shows none",
+        ),
+        (
+            "tick-skips-parts",
+            "                part.tick(read)",
+            "                pass",
+            "a sequence never plays past its first pose, a jog's line never moves, a sweep "
+            "reads nothing",
+        ),
+        (
+            "login-json-unchecked",
+            "        if not is_json:",
+            "        if False:",
+            "another site's page (a form, no preflight) can try passwords on the panel",
+        ),
+        (
+            "login-json-case-sensitive",
+            '            is_json = value.strip().lower().startswith(b"application/json")',
+            '            is_json = value.strip().startswith(b"application/json")',
+            "a client that writes Application/JSON gets 415",
+        ),
+        (
+            "wrong-unlimited",
+            "        if wrong.get(client, 0) >= _WRONG or sum(wrong.values()) >= _WRONG_ALL:",
+            "        if False:",
+            "passwords can be guessed without end (two a second)",
+        ),
+        (
+            "wrong-all-unlimited",
+            "        if wrong.get(client, 0) >= _WRONG or sum(wrong.values()) >= _WRONG_ALL:",
+            "        if wrong.get(client, 0) >= _WRONG:",
+            "guesses from many clients (or addresses) are not limited together",
+        ),
+        (
+            "wrong-not-by-client",
+            "        if wrong.get(client, 0) >= _WRONG or sum(wrong.values()) >= _WRONG_ALL:",
+            "        if sum(wrong.values()) >= _WRONG_ALL:",
+            "one client may guess 30 a minute, not 10",
+        ),
+        (
+            "wrong-not-counted",
+            "            wrong[client] = wrong.get(client, 0) + 1",
+            "            pass",
+            "wrong passwords are never limited",
+        ),
+        (
+            "wrong-never-forgiven",
+            "            self._minute = now\n            self._wrong = {}",
+            "            self._minute = now",
+            "after 10 wrong passwords the owner is locked out until the board restarts",
+        ),
+        (
+            "right-password-limited",
+            "or not _same(password.encode(), self._password):",
+            "or _same(password.encode(), self._password):",
+            "the right password is refused, any wrong one logs in",
+        ),
+        (
+            "armed-session-forgotten",
+            "            sessions.pop(1 if sessions[0][0] == self.armed else 0)",
+            "            sessions.pop(0)",
+            "five logins elsewhere forget the armed page's: it is told to log in mid-drag, "
+            "and the dead-man holds",
+        ),
+        (
+            "lost-never-said",
+            "                    session[2] = why",
+            "                    pass",
+            "a page whose arming the dead-man or another page's STOP ended is not told why",
+        ),
+        (
+            "lost-not-cleared-on-arming",
+            "                    session[2] = None  # armed again",
+            "                    pass  # armed again",
+            "a page armed again still says why its earlier arming ended",
+        ),
+        (
+            "lost-for-own-stop",
+            '        self.estop(None if self.armed == token else "another page pressed STOP")',
+            '        self.estop("another page pressed STOP")',
+            "a page that pressed STOP itself is told another page did",
+        ),
+        (
+            "lost-shown-to-all",
+            "            if session[0] == token:\n                lost = session[2]",
+            "            if session[2]:\n                lost = session[2]",
+            "every page is told why another's arming ended, as if it were its own",
+        ),
+    ],
+    # busservo_web_sliders: a slider's target.
+    "busservo_web_sliders": [
+        (
+            # Was busservo_web's _driver() then _not_playing(); now driving() refuses while
+            # a part (a sequence playing) holds the joints: the sliders' call, told they are
+            # the holder whoever holds, is the port.
+            "target-while-playing",
+            "        panel.driving(token, self)  # (a sequence playing holds the joints)",
+            "        panel.driving(token, panel.busy and panel.busy[0])",
+            "a slider drag during playback fights the sequence",
+        ),
+        (
+            # Was `self._orders += 1` in _target: the drag still stops the other parts
+            # (still()), but its order is not counted.
+            "drag-not-an-order",
+            "        panel.order(self)  # the sliders take over (from a jog, say)",
+            "        panel.orders -= 1\n        panel.order(self)",
+            "a slider drag just after a stop is undone by the stop's halt",
+        ),
+        # New: the hook.
+        (
+            "sliders-still-keeps-stream",
+            "        self.panel.robot.hold()  # the stream ends",
+            "        pass  # the stream ends",
+            "targets streamed but not yet sent go after a calibration's start or a jog: a "
+            "joint moves",
+        ),
+    ],
+    # busservo_web_teach: teaching and sequences.
+    "busservo_web_teach": [
+        (
+            "disarm-keeps-playing",  # was disarm()'s stop(halt): now the part's still()
+            "    def still(self, halt):\n        self.stop(halt)",
+            "    def still(self, halt):\n        pass",
+            "disarming (or the dead-man) leaves the sequence playing",
+        ),
+        (
+            "stop-halt-inverted",
+            "            if halt:\n                names = set()",
+            "            if not halt:\n                names = set()",
+            "STOP lets the pose on its way go on; estop reads and moves before going limp",
+        ),
+        (
+            "stop-no-halt-move",
+            "                panel.robot.move(pose, ms=HALT_MS)",
+            "                pass",
+            "STOP mid-pose lets the joints go on to the pose",
+        ),
+        (
+            "player-never-done",
+            "            if self.player.done:\n                self._done()",
+            "            if self.player.done:\n                pass",
+            "after a sequence ends, the panel says it is playing and refuses the sliders",
+        ),
+        (
+            "name-any-chars",
+            "        or not all(c in _NAME_CHARS for c in name)\n",
+            "",
+            "a sequence name ../x writes outside sequences/",
+        ),
+        (
+            "remove-past-the-end",
+            '        return web.need(body, "index", int, 0, len(steps) - 1)',
+            '        return web.need(body, "index", int, 0, len(steps))',
+            "removing the step past the last gets a 500, not a 400",
+        ),
+        (
+            "speed-unlimited",
+            'web.need(body, "speed", float, 0.1, 10)',
+            'web.need(body, "speed", float, 0.1, 1000)',
+            "playback at 1000x: every pose at once",
+        ),
+        (
             "halt-undoes-later-orders",
-            "            if self._orders == orders:  # nothing else ordered since",
+            "            if panel.orders == orders:  # nothing else ordered since",
             "            if True:  # nothing else ordered since",
             "a stop's halt, whose read was on its way, moves the joints after an estop: "
             "torque back",
         ),
+        # New with the restructure: the sequence holds the joints while it plays (busy).
         (
-            "drag-not-an-order",
-            "        self._orders += 1\n        self.robot.stream(targets)",
-            "        self.robot.stream(targets)",
-            "a slider drag just after a stop is undone by the stop's halt",
+            "playing-not-busy",
+            "        panel.busy = (self, _PLAYING)",
+            "        pass",
+            "a drag, a jog or a calibration is taken during playback: they fight the sequence",
         ),
         (
-            "arm-race-unchecked",
-            "            if self._orders != orders or self.armed not in (None, token):",
+            "done-keeps-busy",
+            "        if self.panel.busy and self.panel.busy[0] is self:\n"
+            "            self.panel.busy = None",
+            "        pass",
+            "after a sequence ends or is stopped, the sliders and the jog are refused for ever",
+        ),
+        (
+            "limp-keeps-arming",
+            "        panel.disarm(halt=False, why=why)",
+            "        panel.order()",
+            "Limp leaves the page armed: a drag moves the arm the person is posing",
+        ),
+    ],
+    # busservo_web_jog: the arm's jog (was in busservo_web_arm, which had no mutants).
+    "busservo_web_jog": [
+        (
+            "jog-without-arming",
+            "        panel.driving(token, self)  # (a sequence playing holds the joints)",
+            "        pass  # (a sequence playing holds the joints)",
+            "any logged-in page jogs the arm, armed or not, during playback too",
+        ),
+        (
+            "jog-max-unchecked",
+            '        by = web.need(body, "by", float, -JOG_MAX, JOG_MAX)',
+            '        by = web.need(body, "by", float)',
+            "a jog of a metre is taken (and a big step goes at once, far)",
+        ),
+        (
+            "jog-race-unchecked",
+            "            if panel.orders != orders:\n"
+            '                raise web.Refused(409, "stopped, or moved otherwise',
+            "            if False:\n"
+            '                raise web.Refused(409, "stopped, or moved otherwise',
+            "a STOP while a jog reads the positions is undone: the jog moves the arm",
+        ),
+        (
+            "jog-from-the-last-goal",
+            "        if self.jogged != orders:  # something else moved the arm",
+            "        if self.goal is None:  # something else moved the arm",
+            "a jog after a drag starts from where the last jog ended, not where the arm is: "
+            "it jumps",
+        ),
+        (
+            "jog-still-keeps-line",
+            "            self.line.stop()\n            self.line = None",
+            "            self.line = None",
+            "a drag, STOP or the dead-man leaves a jog's line streaming a point more",
+        ),
+        (
+            "jog-line-while-disarmed",
+            "        if line and self.panel.armed is not None:",
+            "        if line:",
+            "a jog's line goes on while the panel is disarmed",
+        ),
+        (
+            "edge-never",
+            "        if not 0 < off <= EDGE_MM:",
+            "        if True:",
+            "from the rest pose (the arm stretched) every jog but down is refused",
+        ),
+        (
+            "edge-20-mm",
+            "EDGE_MM = 2  # a jog",
+            "EDGE_MM = 20  # a jog",
+            "a jog far out of reach goes along the edge instead, up to 20 mm from the step asked",
+        ),
+        (
+            "edge-unsaid",
+            '        self.note = "at the edge of the reach',
+            '        self.note = None and "at the edge of the reach',
+            "a jog along the edge is not said: the page shows the step as taken whole",
+        ),
+        (
+            "edge-goal-kept",
+            "        goal[0], goal[1], goal[2] = round(x, 1), round(y, 1), round(z, 1)",
+            "        pass",
+            "after a jog along the edge, the next jog starts from the step asked, out of reach",
+        ),
+        (
+            "jog-not-reloaded-on-a-new-robot",
+            "        if self.robots != self.panel.robots:",
+            "        if False:",
+            "after a calibration saved, the jog drives the old robot's arm (its old trims)",
+        ),
+    ],
+    # busservo_web_calibrate: the calibration page (was in busservo_web_arm, no mutants).
+    "busservo_web_calibrate": [
+        (
+            "calibration-not-busy",
+            "        panel.busy = (self, _BUSY)",
+            "        pass",
+            "a drag, a jog or a sequence is taken while the person holds the limp arm",
+        ),
+        (
+            "calibration-keeps-busy",
+            "        if panel.busy and panel.busy[0] is self:\n            panel.busy = None",
+            "        pass",
+            "after a calibration, the sliders and the jog are refused for ever",
+        ),
+        (
+            "ranges-done-before-a-sweep",
+            "            if short:",
             "            if False:",
-            "a stop, or another page's arming, while arming is reading is ignored: two pages "
-            "armed",
+            "Ranges done before a joint was swept goes on: its range is a point, the check "
+            "fails later without saying which joint was not swept",
+        ),
+        (
+            "calibration-survives-disarm",
+            "        if self.cal and self.panel.armed is None:",
+            "        if False:",
+            "disarming, the dead-man or STOP leaves the calibration under way: nothing else "
+            "drives until it is cancelled",
+        ),
+        (
+            "calibration-stream-goes-on",
+            "        panel.order(self)  # the stream, a jog or a sequence ends",
+            "        panel.orders += 1",
+            "a calibration started under a drag or a jog: the stream moves the limp arm",
+        ),
+        (
+            "home-unconfirmed",
+            '        if body.get("confirm") is not True:',
+            "        if False:",
+            "home moves the arm without the person's yes",
+        ),
+        (
+            "home-race-unchecked",
+            "        if panel.orders != orders or self.cal is not cal:",
+            "        if False:",
+            "a STOP while the home reads the positions is undone: the arm moves",
+        ),
+        (
+            "step-order-unchecked",
+            '        if news["step"] != _AFTER[step]:',
+            "        if False:",
+            "a step out of order (save before check) saves a calibration never checked",
+        ),
+        (
+            "sweep-not-read",
+            '        if self.cal and read and self.news["step"] in ("sweep", "nudge"):',
+            "        if False:",
+            "the sweep reads nothing: every joint is unswept",
+        ),
+        (
+            "read-ms-not-restored",
+            "        panel.read_ms = self._read_ms",
+            "        pass",
+            "after a calibration the panel reads positions every 100 ms, not 150, for ever",
+        ),
+        (
+            "saved-not-adopted",
+            "        panel.adopt(robot)",
+            "        pass",
+            "after a calibration saved, the panel drives the old robot: old trims, old limits",
         ),
     ],
     "busservo_arm": [
