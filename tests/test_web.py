@@ -2035,6 +2035,105 @@ class WhatAUserMet(Tidy):
         run(scenario)
 
 
+class AfterTheSplit(Tidy):
+    # What the mutation pass of the panel's parts (issue 30) found that no test guarded: each
+    # test here fails on the mutant of tests/mutate.py named in it.
+
+    def test_a_login_is_json_whatever_the_case_of_its_content_type(self):
+        # (login-json-case-sensitive) A media type's case means nothing: curl -H
+        # "Content-Type: Application/JSON" logs in.
+        async def scenario(port, world, robot):
+            body = b'{"password": "secret-pw"}'
+            kind = b"Content-Type: Application/JSON; charset=UTF-8\r\n"
+            raw = b"POST /api/login HTTP/1.0\r\n%sContent-Length: %d\r\n\r\n%s" % (
+                kind,
+                len(body),
+                body,
+            )
+            self.assertEqual((await send(port, raw))[:13], b"HTTP/1.0 200 ")
+
+        run(scenario)
+
+    def test_a_page_that_pressed_stop_or_limp_itself_is_told_nothing_ended_its_arming(self):
+        # (lost-for-own-stop) Its own doing: no "another page pressed STOP".
+        async def scenario(port, world, robot):
+            token = await armed(port)
+            reply = (await http(port, "POST", "/api/estop", {}, token))[1]
+            self.assertEqual((reply["armed"], reply["lost"]), (False, None))
+            await http(port, "POST", "/api/arm", {"on": True}, token)
+            reply = (await http(port, "POST", "/api/limp", {}, token))[1]
+            self.assertEqual((reply["armed"], reply["lost"]), (False, None))
+
+        run(scenario)
+
+    def test_a_jog_after_a_drag_starts_where_the_arm_is(self):
+        # (jog-from-the-last-goal) The drag moved the arm: the next jog goes on from there,
+        # not from where the last jog ended (the arm would jump back first).
+        async def scenario(port, world, robot, path):
+            token = await armed(port)
+            pose = {"base": 0, "shoulder": 30, "elbow": 60, "wrist": 60}
+            await http(port, "POST", "/api/target", {"targets": pose}, token)
+            self.assertTrue(await until(lambda: at(world, robot, "wrist", 60)))
+            status, reply = await http(port, "POST", "/api/jog", {"axis": "x", "by": 10}, token)
+            self.assertEqual(status, 200, reply)
+            await polled(port, token, 1000)  # 10 mm at 40 mm/s
+            await http(port, "POST", "/api/target", {"targets": {"base": 20}}, token)
+            self.assertTrue(await until(lambda: at(world, robot, "base", 20)))
+            await polled(port, token, 400)
+            x, y, z, pitch = (await state(port, token))["tool"]
+            status, reply = await http(port, "POST", "/api/jog", {"axis": "z", "by": -5}, token)
+            self.assertEqual(status, 200, reply)
+            for got, want in zip(reply["jog"], (x, y, z - 5, pitch)):
+                self.assertTrue(abs(got - want) < 1, (reply["jog"], (x, y, z - 5, pitch)))
+
+        on_arm(scenario)
+
+    def test_a_calibration_saved_with_links_brings_the_jog_and_once_homed_frees_the_joints(self):
+        # (lazy-part-not-loaded-on-adopt, calibration-keeps-busy, read-ms-not-restored) A panel
+        # with no links: once a calibration is saved with them, the state offers the jog; once
+        # homed, the sliders drive again, and positions are read as often as before.
+        async def scenario(port, world, robot, path):
+            token = await armed(port)
+            self.assertFalse("arm" in await state(port, token))  # no links: no jog loaded
+            status, reply = await calibrate(port, world, token)
+            self.assertEqual(status, 200, reply)
+            body = {"step": "save", "links": LINKS}
+            status, reply = await http(port, "POST", "/api/calibrate", body, token)
+            self.assertEqual((status, reply.get("arm")), (200, True), reply)
+            body = {"step": "home", "confirm": True}
+            status, reply = await http(port, "POST", "/api/calibrate", body, token)
+            self.assertEqual(status, 200, reply)
+            await polled(port, token, 600)
+            body = {"targets": {"base": 5}}
+            status, reply = await http(port, "POST", "/api/target", body, token)
+            self.assertEqual(status, 200, reply)
+            self.assertEqual(_panels[-1].read_ms, busservo_web._READ_MS)
+
+        on_arm(scenario, links=None)
+
+    def test_after_a_calibration_the_jog_drives_the_robot_it_made(self):
+        # (jog-not-reloaded-on-a-new-robot) The arm is made again on the calibrated robot: a
+        # jog starts from where the new trims and directions say the tool point is.
+        async def scenario(port, world, robot, path):
+            token = await armed(port)
+            status, reply = await calibrate(port, world, token)
+            self.assertEqual(status, 200, reply)
+            await http(port, "POST", "/api/calibrate", {"step": "save"}, token)
+            body = {"step": "home", "confirm": True}
+            status, reply = await http(port, "POST", "/api/calibrate", body, token)
+            self.assertEqual(status, 200, reply)
+            pose = {"base": 0, "shoulder": 30, "elbow": 60, "wrist": 60}
+            await http(port, "POST", "/api/target", {"targets": pose}, token)
+            await polled(port, token, 2400)  # the home, then the pose, at 30 degrees/s first
+            x, y, z, pitch = (await state(port, token))["tool"]
+            status, reply = await http(port, "POST", "/api/jog", {"axis": "x", "by": 10}, token)
+            self.assertEqual(status, 200, reply)
+            for got, want in zip(reply["jog"], (x + 10, y, z, pitch)):
+                self.assertTrue(abs(got - want) < 1, (reply["jog"], (x + 10, y, z, pitch)))
+
+        on_arm(scenario)
+
+
 class Parts(Tidy):
     # The core and its parts: the worked example of docs/panel.md plugs in, the core imports
     # no part, and no module of lib/ uses another's private names.
