@@ -368,12 +368,14 @@ class BusServo:
         battery or positions hold it). It raises as read_battery() does."""
         kind = ids is not None  # 0: the battery, 1: positions (as in _waiting)
         waiting = self._waiting
+        ms = time.ticks_ms
+        diff = time.ticks_diff
         if timeout_ms is None:
             timeout_ms = _TIMEOUT_MS + (kind and _TIMEOUT_PER_ID_MS * _count("ids", ids, 84))
         _check("timeout_ms", timeout_ms, 0, _TIMEOUT_MAX_MS)
         if self._cut_at:
             self._finish()  # a request cut short goes first: its reply is waited out
-        start = time.ticks_add(time.ticks_ms(), self.wire_ms())  # when the wire is free
+        start = time.ticks_add(ms(), self.wire_ms())  # when the wire is free
         # Those given up on long ago are not listened for (their replies were likely lost),
         # but still counted: a reply too soon for this query may be one of them. Those of
         # either kind are: the controller answers in turn, and a burst of late replies of
@@ -390,16 +392,13 @@ class BusServo:
             # Those a query gave up on were waited for so already: now only while
             # replies keep coming (the controller answers in turn, so a burst of
             # late replies may come).
-            now = time.ticks_ms()
-            waited = time.ticks_diff(now, start)
+            now = ms()
+            waited = diff(now, start)
             if waited > timeout_ms + _LATE_MS:
                 break
             if got is None:
-                if (
-                    not (waiting[kind] or given)
-                    or not waiting[kind]
-                    and waited > _GAP_MS
-                    and time.ticks_diff(now, self._heard) > _GAP_MS
+                if not waiting[kind] and (
+                    not given or waited > _GAP_MS and diff(now, self._heard) > _GAP_MS
                 ):
                     break
                 yield
@@ -417,17 +416,23 @@ class BusServo:
         else:
             self.request_battery()
         waiting[kind + 8] = 0  # (another task's request must not clear it: not in _went)
-        # Its reply is due within timeout_ms of the request leaving the wire.
-        deadline = time.ticks_add(time.ticks_ms(), self.wire_ms() + timeout_ms)
-        late = 0  # frames decoded since the deadline: one last look, then give up
+        # Its reply is due within timeout_ms of the request leaving the wire. One whose
+        # first bytes came by then is let come whole (for _LATE_MS at most).
+        deadline = time.ticks_add(ms(), self.wire_ms() + timeout_ms)
+        cmd = kind and 21 or 15  # its command: CMD_MULT_SERVO_POS_READ or CMD_GET_BATTERY_VOLTAGE
+        late = 0  # frames decoded since the deadline: a few more, then give up
         while True:
-            if late or time.ticks_diff(time.ticks_ms(), deadline) >= 0:
-                late += 1
+            over = diff(ms(), deadline)
             got = self._next_frame()
             if not waiting[kind]:
                 break  # the reply: it matched the request
             self._hold(got)
-            if got is None and late or late > _QUEUE:
+            r = self._r + 3  # the command of a frame on its way, if any: a reply's start?
+            if over >= 0 and (
+                got is None
+                and (over >= _LATE_MS or r >= self._w or self._rx[r] != cmd)
+                or late > _QUEUE
+            ):
                 if waiting[kind + 8] and waiting[kind + 10]:
                     # A reply that fits came too soon and was taken for a late one, and
                     # none came after it, from a peer not known to be as slow as the
@@ -438,12 +443,14 @@ class BusServo:
                     waiting[kind + 10] = 1
                     self.early += 1
                     got = self._queued - 1
-                    if got >= 0 and self._queue[got] == (kind and 21 or 15):  # its command
+                    if got >= 0 and self._queue[got] == cmd:
                         self._queued = got
                     return
                 raise OSError(errno.ETIMEDOUT, "no reply")
             if got is None:
                 yield
+            elif over >= 0:
+                late += 1
         # Linger while replies keep coming (until the line has been quiet for `quiet` ms,
         # or _GAP_MS at most; what comes is an event, the state holds the last): with
         # a peer faster than the wire, whose timing cannot tell a late reply from the
@@ -451,7 +458,7 @@ class BusServo:
         # earlier request's; with some given up on, a burst of late ones may be coming
         # (the controller answers in turn, both kinds) and this one its first, which the
         # next query may not listen for (two bytes' time tells).
-        answered = time.ticks_ms()
+        answered = ms()
         quiet = _LINGER_MS
         if waiting[kind + 10] != 1:
             if not (waiting[2] or waiting[3]):
@@ -460,10 +467,8 @@ class BusServo:
         while True:
             got = self._next_frame()
             self._hold(got)
-            now = time.ticks_ms()
-            if got is None and time.ticks_diff(now, self._heard) >= quiet:
-                return
-            if time.ticks_diff(now, answered) > _GAP_MS:
+            now = ms()
+            if got is None and diff(now, self._heard) >= quiet or (diff(now, answered) > _GAP_MS):
                 return
             if got is None:
                 yield

@@ -102,6 +102,18 @@ class Queries(unittest.TestCase):
         self.assertTrue(timed_out(lambda: self.bus.read_battery(timeout_ms=20)))
         self.assertIsNone(self.bus.battery)
 
+    def test_a_reply_coming_in_at_the_deadline_is_taken_whole(self):
+        # Its first bytes (up to its command) come 5 ms before the deadline (40 ms, and the
+        # request's 4 bytes on the wire), its last 10 ms after it: it came in time, and is
+        # the answer, not a timeout (a process busy elsewhere may look in between the two).
+        self.uart.feed_later(BATTERY_7500[:4], 40)
+        self.uart.feed_later(BATTERY_7500[4:], 55)
+        self.assertEqual(self.bus.read_battery(timeout_ms=40), 7500)
+        self.uart.feed_later(POSITIONS_ALL_500[:9], 50)
+        self.uart.feed_later(POSITIONS_ALL_500[9:], 65)
+        self.assertEqual(self.bus.read_positions([1, 2, 3, 4, 5, 6], timeout_ms=40), ALL_500)
+        self.assertIsNone(self.bus.poll())
+
     def test_the_default_timeouts(self):
         start = time.ticks_ms()
         self.assertTrue(timed_out(self.bus.read_battery))
