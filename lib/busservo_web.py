@@ -84,27 +84,28 @@ import time
 import busservo_motion as bm
 
 try:
-    import micropython  # noqa: F401 (on a board; CPython has none)
+    from micropython import const
 except ImportError:  # CPython, on a computer: busservo_cpython gives what it lacks
-    from busservo_cpython import asyncio, json, time
+    from busservo_cpython import asyncio, const, json, time
 
-_CLIENTS = 4  # requests being read, and answered, at once
+# The limits and times (those not const() the tests read, or shorten):
+_CLIENTS = const(4)  # requests being read, and answered, at once
 _HEAD_MS = 1000  # a connection's request must be in within this, or it is closed
-_REQUEST = 4096  # bytes: a request's line, headers and body; a longer one gets 400
+_REQUEST = const(4096)  # bytes: a request's line, headers and body; a longer one gets 400
 _CLIENT_MS = 10000  # an answer that takes longer is cut
-_SESSIONS = 4  # logins remembered; a new one forgets the oldest (never the armed page's)
-_WRONG = 10  # wrong passwords a minute from one client; more get 429 until the minute is over
-_WRONG_ALL = 30  # wrong passwords a minute from all clients
-_WRONG_MS = 60000
-_BODY = 1024  # bytes: a larger request body gets 413
-_CHUNK = 256  # bytes of the page sent at a time
-_DEAD_MS = 1000  # the armed page silent this long: hold (the dead-man)
-_OPEN_MS = 3000  # a page asked within this: read positions often
+_SESSIONS = const(4)  # logins remembered; a new one forgets the oldest (never the armed page's)
+_WRONG = const(10)  # wrong passwords a minute from one client; more get 429 till the minute ends
+_WRONG_ALL = const(30)  # wrong passwords a minute from all clients
+_WRONG_MS = const(60000)
+_BODY = const(1024)  # bytes: a larger request body gets 413
+_CHUNK = const(256)  # bytes of the page sent at a time
+_DEAD_MS = const(1000)  # the armed page silent this long: hold (the dead-man)
+_OPEN_MS = const(3000)  # a page asked within this: read positions often
 _READ_MS = 150  # positions asked this often while a page is open
-_BATTERY_MS = 2000
-_TICK_MS = 10  # the panel's loop: poll the bus, step the stream and the parts
-_ASK_MS = 5  # a query's next step: a byte takes 1 ms at 9600 baud
-_ERROR_MS = 3000  # the loop's last error is shown until this long after it last happened
+_BATTERY_MS = const(2000)
+_TICK_MS = const(10)  # the panel's loop: poll the bus, step the stream and the parts
+_ASK_MS = const(5)  # a query's next step: a byte takes 1 ms at 9600 baud
+_ERROR_MS = const(3000)  # the loop's last error shows this long after it last happened
 _POSITIONS = 21  # busservo.CMD_MULT_SERVO_POS_READ: a reply of positions
 # The parts serve() plugs in: (module, None: at once; or NAME: when /api/NAME is first asked
 # for, or, with a condition, when condition(panel) holds: at the start, or once a
