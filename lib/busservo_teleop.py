@@ -130,6 +130,7 @@ class Teleop:
         self.read_at = now  # ticks_ms of the last good leader reply
         self._sent = now  # ticks_ms of the last move
         self.period_ms = 0  # between the last two leader replies: the rate is 1000 / this
+        self._cycle = 40  # ms: the last period that was no pause, each move's time
         self.engaged = False  # the follower follows (else it is on its way, at dps)
         self.held = None  # the leader's joint that does not answer, holding the follower
         self.done = False
@@ -208,10 +209,6 @@ class Teleop:
     def _leader_read(self):
         now = time.ticks_ms()
         positions = self.leader.bus.positions
-        if self.reads:
-            self.period_ms = time.ticks_diff(now, self.read_at)
-            if self.period_ms > _GAP_MS:
-                self._disengage()
         goal = self._goal
         for k in range(len(goal)):
             p = positions.get(self._lids[k])
@@ -227,9 +224,13 @@ class Teleop:
                 q = self._hi[k]
                 self.clamped += 1
             goal[k] = q
-        if self.held is not None:
-            self.held = None
-            self._disengage()
+        self.held = None  # (a hold disengaged it: it engages again, at dps)
+        if self.reads:  # between two good replies: a pause, or the cycle
+            self.period_ms = time.ticks_diff(now, self.read_at)
+            if self.period_ms > _GAP_MS:
+                self._disengage()
+            else:
+                self._cycle = self.period_ms
         if not self.reads and self.rest:
             self._check_rest(positions)
         self.reads += 1
@@ -278,13 +279,13 @@ class Teleop:
             return False
         now = time.ticks_ms()
         elapsed = time.ticks_diff(now, self._sent)
-        glide = self.period_ms
+        glide = self._cycle
         if glide < _GLIDE_MIN:
             glide = _GLIDE_MIN
         elif glide > _GLIDE_MAX:
             glide = _GLIDE_MAX
         if elapsed > glide:
-            elapsed = glide  # after a pause, no leap
+            elapsed = glide  # after a pause, no leap: no more than a cycle's way at a time
         engaged = self.engaged
         goal = self._goal
         at = self._at
