@@ -286,11 +286,17 @@ class Teleop:
             glide = _GLIDE_MAX
         if elapsed > glide:
             elapsed = glide  # after a pause, no leap: no more than a cycle's way at a time
-        engaged = self.engaged
         goal = self._goal
         at = self._at
         owed = self._owed
         pairs = self._pairs
+        if not self.engaged:  # within ENGAGE degrees already (after a short pause, say)?
+            for k in range(len(goal)):
+                if abs(goal[k] - at[k]) > self._tol[k]:
+                    break
+            else:
+                self.engaged = True
+        engaged = self.engaged
         near = True
         slowed = False
         ms = glide

@@ -14,6 +14,8 @@ import wire
 from busservo import CMD_MULT_SERVO_POS_READ as READ
 from busservo import CMD_MULT_SERVO_UNLOAD as UNLOAD
 from busservo import CMD_SERVO_MOVE as MOVE
+from fakeuart import FakeUART
+from test_alloc import heap_per_call
 
 NAMES = ("base", "shoulder", "elbow", "wrist", "roll", "gripper")
 BYTE_MS = 10 / 9.6  # 10 bits at 9600 baud
@@ -416,6 +418,57 @@ class Safety(Tidy):
         self.assertTrue(t.done)
         self.assertTrue(t.reads > 70, t.reads)  # 3 s at 28 a second
         self.assertTrue(t.moves > 60, t.moves)
+
+
+def positions_reply(ids, position):
+    """The controller's reply to a positions request: each of ids at position."""
+    frame = bytearray((0x55, 0x55, 3 * len(ids) + 3, READ, len(ids)))
+    for servo_id in ids:
+        frame += bytes((servo_id, position & 0xFF, position >> 8))
+    return bytes(frame)
+
+
+class Budget(Tidy):
+    def test_a_step_allocates_nothing_but_each_reads_ask(self):
+        # The world's UART models allocate (they are Python): here the driver writes to the
+        # fake UARTs of tests/test_alloc.py, which do not, on a clock the test steps.
+        clock = wire.Clock()
+        clocked(clock)
+        lu, fu = FakeUART(), FakeUART()
+        lead = arm(busservo.BusServo(lu))
+        follow = arm(busservo.BusServo(fu), shoulder={"direction": -1, "trim": 3.5})
+        t = bt.Teleop(lead, follow, rest=False)
+        t.step()  # the leader limp, the follower asked where it is
+        clock.advance_ms(40)
+        fu.feed(positions_reply(range(1, 7), 500))
+        t.step()  # the follower read, the leader asked
+        turn = [0]
+
+        def reply():  # outside the measurement: the leader's reply has come
+            clock.advance_ms(40)
+            lu.clear()
+            fu.clear()
+            turn[0] += 1
+            lu.feed(positions_reply(range(1, 7), 490 + turn[0] % 3))
+
+        for _ in range(5):
+            reply()
+            t.step()
+        self.assertTrue(t.engaged)
+        ids = [1, 2, 3, 4, 5, 6]
+        bus = busservo.BusServo(FakeUART())
+
+        def ask():  # a query begun: the generator, and what its first step takes (here, on
+            for _ in bus.ask(ids):  # the test's clock, two bound methods: none on a board)
+                break
+
+        ask = heap_per_call(ask)
+        self.assertTrue(ask > 0)
+        moves = t.moves
+        self.assertEqual(heap_per_call(t.step, reply), ask)  # a reply, a move, a new ask
+        self.assertEqual(t.moves, moves + 21)  # (one step to warm up, then 20)
+        self.assertEqual(heap_per_call(t.step), 0)  # waiting for the reply
+        self.assertEqual(t.moves, moves + 21)
 
 
 if __name__ == "__main__":
