@@ -50,8 +50,9 @@ MPY="test_commands test_sim test_async test_motion test_arm test_calibrate test_
 # simulator's, the wire world's, asyncio's, the motion's, the arm's, the calibration's, the
 # teleop's and the panel's, and test_host (the serial port through pyserial on a pty, the
 # busservo command, pip install .) and test_hid (a USB HID controller through a fake hidapi
-# binding, and the real binding with nothing plugged in), which run on CPython only (CPY_ONLY). test_wire and
-# test_soak look at the world's own heap and its MicroPython-style asyncio: not on CPython.
+# binding, and the real binding with nothing plugged in), which run on CPython only
+# (CPY_ONLY). test_wire and test_soak look at the world's own heap and its MicroPython-style
+# asyncio: not on CPython.
 CPY="test_frames test_commands test_queries test_sim test_reliability test_async test_motion"
 CPY="$CPY test_arm test_calibrate test_teleop test_web test_host test_hid test_adversarial"
 CPY_ONLY="test_host test_hid"
