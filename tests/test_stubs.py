@@ -13,6 +13,7 @@ import busservo_board
 import busservo_calibrate
 import busservo_motion
 import busservo_sim
+import busservo_teleop
 import busservo_web
 
 MODULES = (
@@ -24,6 +25,7 @@ MODULES = (
     busservo_web,
     busservo_arm,
     busservo_calibrate,
+    busservo_teleop,
 )
 
 # AsyncBusServo.__getattr__ forwards to its BusServo: its stub declares what it forwards, with
@@ -65,6 +67,9 @@ def instances():
         "Line": arm.line_to(120, 0, 50),
         "Calibration": busservo_calibrate.Calibration(bus, {"base": 1}),
         "Refused": busservo_web.Refused(409, "why"),
+        "Teleop": busservo_teleop.Teleop(
+            robot, busservo_motion.Robot(bus, {"base": busservo_motion.Joint(2)})
+        ),
     }
 
 
