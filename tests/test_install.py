@@ -120,6 +120,7 @@ class Packages(unittest.TestCase):
                 "lib/busservo_async.json",
                 "lib/busservo_calibrate.json",
                 "lib/busservo_motion.json",
+                "lib/busservo_record.json",
                 "lib/busservo_sim.json",
                 "lib/busservo_web.json",
             ],
@@ -419,6 +420,18 @@ class Manifest(unittest.TestCase):
                 "lib/busservo_motion.py",
                 "lib/busservo_arm.py",
                 "lib/busservo_calibrate.py",
+            ],
+        )
+        for path in named:
+            os.stat(path)
+        named, meta = self.run_manifest(record=True)  # the recorder, on the motion layer
+        self.assertEqual(
+            named,
+            [
+                "lib/busservo.py",
+                "lib/busservo_board.py",
+                "lib/busservo_motion.py",
+                "lib/busservo_record.py",
             ],
         )
         for path in named:
