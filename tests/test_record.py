@@ -253,10 +253,10 @@ class Recording(Tidy):
                 self.at = 0
 
             def write(self, b):
-                start = w.clock.now_us
+                came = w.arrived_total
                 w.clock.advance_ms(50)
                 flash.extend(b)
-                writes.append((start, w.clock.now_us, len(b)))
+                writes.append((w.arrived_total - came, len(b)))  # bytes in during the stall
                 return len(b)
 
             def readline(self):
@@ -281,18 +281,14 @@ class Recording(Tidy):
         record(w, rec, 20000)
         self.assertEqual(rec.missed, 0)
         self.assertEqual((bus.noise, w.overrun), (0, 0))
-        pieces = [n for _, _, n in writes[2:]]  # after the magic and the joints' line
+        pieces = writes[2:]  # after the magic and the joints' line
         self.assertTrue(len(pieces) > 5)
-        self.assertEqual(set(pieces), {br.PIECE})
-        arrived = [us for us, _ in w.arrived]  # the last 1024 bytes that came
-        stalls = [(s, e) for s, e, _ in writes[2:] if s >= arrived[0]]
-        self.assertTrue(len(stalls) > 1)
-        for start, end in stalls:
-            self.assertEqual([us for us in arrived if start <= us <= end], [], (start, end))
+        self.assertEqual(set(pieces), {(0, br.PIECE)})  # nothing came in during a stall
+        self.assertTrue(w.arrived_total > 5000)
         recording = rec.stop()
         self.assertTrue(flash.startswith(br.MAGIC))
         self.assertEqual(len(recording), rec.samples)
-        self.assertTrue(rec.samples, 400)  # the stalls delay reads: fewer, none lost
+        self.assertTrue(rec.samples > 400)  # the stalls delay reads: fewer, none lost
 
     def test_to_sequence_keeps_every_sample_within_the_tolerance(self):
         w, bus = world()
@@ -374,6 +370,275 @@ class Recording(Tidy):
             raises(lambda: br.Recording.load(path), path, "line 2", "pose")
         finally:
             os.remove(path)
+
+
+def recorded(port="rp2", ms=10000, robot=None, every=5, hand=wave):
+    """(world, bus, robot, recording): ms of a hand moving the six joints of robot (a chain by
+    default), recorded with a step every ms (the hand moves every `every` ms)."""
+    w, bus = world(port)
+    robot = robot(bus) if robot else chain(bus)
+    rec = br.Recorder(robot)
+    w.run_ms(20)  # limp
+    sim = w.sim
+    for t in range(ms):
+        if t % every == 0:
+            for i in range(1, 7):
+                sim.turn(i, hand(t, i))
+        rec.step()
+        w.clock.advance_ms(1)
+    return w, bus, robot, rec.stop()
+
+
+def play(w, player, every=1, look=5, most=300000):
+    """player.step() every `every` ms until done; every `look` ms of its pace, the servos'
+    positions against the recording's (linear between its samples). Returns (the pace's
+    length in ms: from the first pose reached to the last, the joints' RMS error in degrees,
+    the worst error)."""
+    samples = [(t, list(pos)) for t, pos in player.recording.samples()]
+    ids = [player.robot.joints[name].servo_id for name in player.names]
+    clock = w.clock
+    square = worst = 0.0
+    count = k = 0
+    t = 0
+    while not player.done and t < most:
+        player.step()
+        for _ in range(every):
+            clock.advance_ms(1)
+            t += 1
+            if player.started is None or t % look or player.done:
+                continue
+            at = clock.ticks_diff(clock.ticks_ms(), player.started) * player.speed
+            if not 0 <= at <= samples[-1][0]:
+                continue
+            while samples[k + 1][0] < at:
+                k += 1
+            (ta, a), (tb, b) = samples[k], samples[k + 1]
+            u = (at - ta) / (tb - ta)
+            for j in range(len(ids)):
+                want = a[j] + (b[j] - a[j]) * u
+                off = (w.sim.position(ids[j]) - want) / PER_DEGREE
+                square += off * off
+                count += 1
+                worst = max(worst, abs(off))
+    assert player.done, "still playing after %d ms" % most
+    return clock.ticks_diff(player._due, player.started), math.sqrt(square / count), worst
+
+
+class Playing(Tidy):
+    def test_it_goes_into_the_first_pose_at_its_dps_then_glides_at_the_recorded_pace(self):
+        w, bus, robot, recording = recorded(ms=2000)
+        first = w.frames_total
+        w.sim.turn(1, 200)  # the hand left a joint far from the first pose
+        player = recording.play(robot, dps=20)
+        self.assertIs(robot.player, player)
+        play(w, player)
+        frames = w.frames(first)
+        self.assertEqual(frames[0][3], CMD_MULT_SERVO_POS_READ)  # where are they?
+        got = moves(w, first + 1)
+        samples = [(t, list(pos)) for t, pos in recording.samples()]
+        # Into the first pose: 300-odd positions at 20 degrees a second
+        _, ms, pos = got[0]
+        self.assertEqual(pos, {i + 1: p for i, p in enumerate(samples[0][1])})
+        self.assertEqual(ms, math.ceil((samples[0][1][0] - 200) / PER_DEGREE * 1000 / 20))
+        # Then a move a sample, each taking the gap to its sample, sent as the one before ends
+        self.assertEqual(len(got), len(samples))
+        for k in range(2, len(got)):
+            (us, ms, pos), (before, _, _) = got[k], got[k - 1]
+            self.assertEqual(pos, {i + 1: p for i, p in enumerate(samples[k][1])})
+            self.assertTrue(abs(ms - (samples[k][0] - samples[k - 1][0])) <= 2, (k, ms))
+            self.assertTrue(abs((us - before) / 1000 - got[k - 1][1]) <= 2, k)
+        self.assertTrue(player.done and robot.player is None)
+
+    def test_a_minute_plays_for_its_length_and_follows_it_on_every_port(self):
+        # The issue's measure: over 60 s, the duration within 1 % and the joints' RMS error
+        # within 1.5 degrees, with the servo model moving the joints.
+        for port in wire.PORTS:
+            w, bus, robot, recording = recorded(port, 60000)
+            self.assertTrue(recording.duration_ms > 59000, recording.duration_ms)
+            player = recording.play(robot)
+            length, rms, worst = play(w, player)
+            self.assertTrue(abs(length - recording.duration_ms) <= 600, (port, length))
+            self.assertTrue(rms <= 1.5, (port, rms))
+            self.assertTrue(abs(length - recording.duration_ms) <= 5, (port, length))
+            self.assertTrue(rms <= 0.5 and worst <= 3, (port, rms, worst))
+
+    def test_a_quarter_and_twice_the_speed_and_a_slow_loop(self):
+        w, bus, robot, recording = recorded("esp32", 8000)
+        for speed, every in ((0.25, 1), (2, 1), (1, 10), (2, 10)):
+            player = recording.play(robot, speed=speed)
+            length, rms, worst = play(w, player, every)
+            want = recording.duration_ms / speed
+            self.assertTrue(abs(length - want) <= want / 100, (speed, every, length, want))
+            self.assertTrue(rms <= 1.5, (speed, every, rms))
+            w.run_ms(100)
+
+    def test_estop_stop_and_ctrl_c_stop_it(self):
+        w, bus, robot, recording = recorded(ms=3000)
+        for how in ("estop", "stop", "ctrl-c"):
+            player = recording.play(robot)
+            for _ in range(2500):
+                player.step()
+                w.clock.advance_ms(1)
+            self.assertTrue(player.index > 5, (how, player.index))
+            if how == "estop":
+                robot.estop()
+            elif how == "stop":
+                player.stop()
+            else:
+                br.time = Interrupted(w.clock)
+                try:
+                    player.wait()
+                    raise AssertionError("no KeyboardInterrupt")
+                except KeyboardInterrupt:
+                    pass  # raised again, as Ctrl-C in a blocking call is
+                br.time = w.clock
+            self.assertTrue(player.done and robot.player is None, how)
+            w.run_ms(60)  # what was on the wire is in
+            sent = len(moves(w))
+            for _ in range(500):
+                self.assertFalse(player.step())
+                w.clock.advance_ms(1)
+            self.assertEqual(len(moves(w)), sent, how)
+
+    def test_a_new_player_or_a_line_stops_it_and_it_stops_a_sequence(self):
+        import busservo_arm as ba
+
+        busservo_arm_time = ba.time
+        w, bus, robot, recording = recorded(ms=2000, robot=lambda bus: arm_robot(bus))
+        ba.time = w.clock
+        try:
+            arm = ba.Arm(robot, {"base_height": 70, "upper_arm": 105, "forearm": 98, "hand": 150})
+            sequence = bm.Sequence([({"base": 10}, 300), ({"base": 20}, 300)])
+            player = recording.play(robot)
+            player.step()
+            seq = sequence.play(robot)  # a sequence stops it
+            self.assertTrue(player.done and robot.player is seq)
+            player = recording.play(robot)  # it stops a sequence
+            self.assertTrue(seq.done and robot.player is player)
+            for _ in range(300):
+                player.step()
+                w.clock.advance_ms(1)
+            line = arm.line_to(150, 0, 100)  # a line stops it
+            self.assertTrue(player.done and robot.player is line)
+            again = recording.play(robot)  # and it stops a line
+            self.assertTrue(line.done and robot.player is again)
+        finally:
+            ba.time = busservo_arm_time
+
+    def test_joint_limits_and_dps_hold_and_a_slowed_move_is_waited_for(self):
+        def slow(bus):
+            joints = {"j%d" % i: bm.Joint(i) for i in range(3, 7)}
+            joints["j1"] = bm.Joint(1, dps=40)
+            joints["j2"] = bm.Joint(2, limits=(-20, 20))
+            return bm.Robot(bus, joints)
+
+        w, bus, robot, recording = recorded(ms=6000, robot=slow)
+        first = w.frames_total
+        player = recording.play(robot)
+        play(w, player)
+        self.assertTrue(player.slowed > 5)
+        got = moves(w, first)
+        low, high = (robot.joints["j2"].position(d) for d in (-20, 20))
+        for k in range(1, len(got)):
+            (us, ms, pos), (before, ms_before, pos_before) = got[k], got[k - 1]
+            self.assertTrue(low <= pos[2] <= high, pos)
+            # j1 no faster than 40 degrees a second, from where the move before left it
+            self.assertTrue(abs(pos[1] - pos_before[1]) <= ms * 40 * PER_DEGREE / 1000 + 1, k)
+            # and no move is in before the one before has been made
+            self.assertTrue(us - before >= ms_before * 1000 - 1000, (k, us - before, ms_before))
+
+    def test_await_playback_plays_to_the_end_while_other_tasks_run(self):
+        w, bus, robot, recording = recorded(ms=3000)
+        bm._asyncio = SimAsyncio(w, bus)
+        ticks = []
+        player = recording.play(robot)
+
+        async def other():
+            while not player.done:
+                ticks.append(w.clock.now_us)
+                await bm._asyncio.sleep_ms(10)
+
+        async def main():
+            asyncio.create_task(other())
+            await player
+
+        asyncio.run(main())
+        self.assertTrue(player.done and player.index == len(recording) - 1)
+        length = w.clock.ticks_diff(player._due, player.started)
+        self.assertTrue(abs(length - recording.duration_ms) <= 30, length)
+        self.assertTrue(len(ticks) > 100, len(ticks))  # the other task ran meanwhile
+
+
+class TodaysPlayer(Tidy):
+    # Two things busservo_motion's Player does right that no test would miss if they broke
+    # (issue 29); the same for Playback is tested above.
+    def test_a_pose_a_joints_dps_slows_is_waited_for_its_real_time_not_the_ms_asked(self):
+        w, bus = world()
+        robot = bm.Robot(bus, {"j1": bm.Joint(1, dps=30), "j2": bm.Joint(2)})
+        robot.home(pose={"j1": 0, "j2": 0}, dps=1000)
+        w.run_ms(100)
+        first = w.frames_total
+        player = bm.Sequence([({"j1": 60}, 100), ({"j1": 0, "j2": 10}, 100)]).play(robot)
+        for _ in range(5000):
+            player.step()
+            w.clock.advance_ms(1)
+        got = moves(w, first)
+        self.assertEqual([ms for _, ms, _ in got], [2000, 2000])  # 60 degrees at 30 a second
+        self.assertTrue(got[1][0] - got[0][0] >= 2000000 - 1000, got[1][0] - got[0][0])
+
+    def test_a_line_started_while_a_sequence_plays_stops_the_sequence(self):
+        import busservo_arm as ba
+
+        before = ba.time
+        w, bus = world()
+        ba.time = w.clock
+        try:
+            robot = arm_robot(bus)
+            arm = ba.Arm(robot, {"base_height": 70, "upper_arm": 105, "forearm": 98, "hand": 150})
+            arm.move_to(150, 0, 100, ms=0)
+            seq = bm.Sequence([({"base": 10}, 300), ({"base": 20}, 300), ({"base": 30}, 300)])
+            player = seq.play(robot)
+            self.assertTrue(player.step())
+            line = arm.line_to(150, 0, 60)
+            self.assertTrue(player.done and robot.player is line)
+            robot.estop()  # stops the line: nothing else drives the joints
+            self.assertTrue(line.done and robot.player is None)
+            w.run_ms(100)
+            sent = len(moves(w))
+            for _ in range(1000):
+                self.assertFalse(player.step() or line.step())
+                w.clock.advance_ms(1)
+            self.assertEqual(len(moves(w)), sent)
+        finally:
+            ba.time = before
+
+
+class Interrupted:
+    """time, on the world's clock, with Ctrl-C pressed during the first sleep."""
+
+    def __init__(self, clock):
+        self.clock = clock
+
+    def __getattr__(self, name):
+        return getattr(self.clock, name)
+
+    def sleep_ms(self, ms):
+        raise KeyboardInterrupt
+
+
+def arm_robot(bus):
+    """busservo_arm's four joints and two more, ids 1..6."""
+    return bm.Robot(
+        bus,
+        {
+            "base": bm.Joint(1),
+            "shoulder": bm.Joint(2),
+            "elbow": bm.Joint(3),
+            "wrist": bm.Joint(4),
+            "roll": bm.Joint(5),
+            "gripper": bm.Joint(6),
+        },
+    )
 
 
 class SimAsyncio:
