@@ -70,8 +70,12 @@ class Recorder:
         self.names = _names(robot, names)
         if path is not None and _type(path) is not str:
             raise TypeError("path must be a file name (str) or None, got %r" % (path,))
-        if timeout_ms is not None:
-            bm.number("timeout_ms", timeout_ms, 0, 60000)
+        if timeout_ms is not None and (
+            _type(timeout_ms) is not _int or not 0 <= timeout_ms <= 60000
+        ):
+            raise (ValueError if _type(timeout_ms) is _int else TypeError)(
+                "timeout_ms must be None or an int in 0..60000 ms, got %r" % (timeout_ms,)
+            )
         self.robot = robot
         self.bus = robot.bus
         self.path = path

@@ -348,6 +348,7 @@ class Recording(Tidy):
         raises(lambda: br.Recorder(robot, names="j1"), "names", "list")
         raises(lambda: br.Recorder(robot, path=5), "path", "5")
         raises(lambda: br.Recorder(robot, timeout_ms=-1), "timeout_ms", "-1")
+        raises(lambda: br.Recorder(robot, timeout_ms=1.5), "timeout_ms", "int", "1.5")
         raises(lambda: br.Recorder("robot"), "robot", "Robot")
         rec = br.Recorder(robot, limp=False)
         record(w, rec, 300, n=2)
