@@ -42,19 +42,22 @@ cd "$(dirname "$0")/.."
 # .mpy, and that a traceback from inside it names the line), test_sim (busservo_sim, and
 # busservo_board's fall-back to it), test_async (busservo_async), test_motion
 # (busservo_motion), test_arm (busservo_arm), test_calibrate (busservo_calibrate), test_teleop
-# (busservo_teleop) and test_web (busservo_web, and the page it serves, found beside the .mpy).
-# The rest would run the same code again. --mpy-all runs every module against the .mpy too.
+# (busservo_teleop), test_record (busservo_record) and test_web (busservo_web, and the page it
+# serves, found beside the .mpy). The rest would run the same code again. --mpy-all runs every
+# module against the .mpy too.
 MPY="test_commands test_sim test_async test_motion test_arm test_calibrate test_teleop test_web"
+MPY="$MPY test_record"
 # The CPython pass: the same modules run on a computer (lib/busservo_cpython.py gives CPython
 # what it lacks, tests/cpython.py the tests), labelled "(CPython)": the driver's, the
 # simulator's, the wire world's, asyncio's, the motion's, the arm's, the calibration's, the
-# teleop's and the panel's, and test_host (the serial port through pyserial on a pty, the
-# busservo command, pip install .) and test_hid (a USB HID controller through a fake hidapi
-# binding, and the real binding with nothing plugged in), which run on CPython only
-# (CPY_ONLY). test_wire and test_soak look at the world's own heap and its MicroPython-style
-# asyncio: not on CPython.
+# teleop's, the recorder's and the panel's, and test_host (the serial port through pyserial on
+# a pty, the busservo command, pip install .) and test_hid (a USB HID controller through a
+# fake hidapi binding, and the real binding with nothing plugged in), which run on CPython
+# only (CPY_ONLY). test_wire and test_soak look at the world's own heap and its
+# MicroPython-style asyncio: not on CPython.
 CPY="test_frames test_commands test_queries test_sim test_reliability test_async test_motion"
 CPY="$CPY test_arm test_calibrate test_teleop test_web test_host test_hid test_adversarial"
+CPY="$CPY test_record"
 CPY_ONLY="test_host test_hid"
 # The longest modules start first, so that the short ones fill the other cores meanwhile and
 # the run ends soon after its longest module does (in the order of their times, measured).
@@ -67,7 +70,7 @@ SLOW="$SLOW test_scripts test_bench_web test_arm test_docs test_adversarial"
 # real time beside them (the web panel, the browser, the pty, the examples), which can, get
 # one first. test_soak (a day of the panel) takes most of the suite's CPU time.
 NICE="test_reliability test_soak test_wire test_motion test_arm test_calibrate test_bench_motion"
-NICE="$NICE test_bench_arm test_adversarial"
+NICE="$NICE test_bench_arm test_adversarial test_record"
 CODE="lib tests examples boards"
 COUNTS="tests/run.sh-counts:"  # the last line of a module's run: tests run, failed, skipped
 

@@ -120,6 +120,7 @@ class Packages(unittest.TestCase):
                 "lib/busservo_async.json",
                 "lib/busservo_calibrate.json",
                 "lib/busservo_motion.json",
+                "lib/busservo_record.json",
                 "lib/busservo_sim.json",
                 "lib/busservo_teleop.json",
                 "lib/busservo_web.json",
@@ -424,13 +425,14 @@ class Manifest(unittest.TestCase):
         )
         for path in named:
             os.stat(path)
-        named, meta = self.run_manifest(teleop=True)  # on the motion layer
+        named, meta = self.run_manifest(record=True, teleop=True)  # on the motion layer
         self.assertEqual(
             named,
             [
                 "lib/busservo.py",
                 "lib/busservo_board.py",
                 "lib/busservo_motion.py",
+                "lib/busservo_record.py",
                 "lib/busservo_teleop.py",
             ],
         )

@@ -12,6 +12,7 @@ import busservo_async
 import busservo_board
 import busservo_calibrate
 import busservo_motion
+import busservo_record
 import busservo_sim
 import busservo_teleop
 import busservo_web
@@ -26,6 +27,7 @@ MODULES = (
     busservo_arm,
     busservo_calibrate,
     busservo_teleop,
+    busservo_record,
 )
 
 # AsyncBusServo.__getattr__ forwards to its BusServo: its stub declares what it forwards, with
@@ -54,6 +56,7 @@ def instances():
     links = {"base_height": 70, "upper_arm": 105, "forearm": 98, "hand": 150}
     arm = busservo_arm.Arm(busservo_motion.Robot(bus, joints), links)
     arm.move_to(100, 0, 50, ms=0)  # known: the line reads nothing
+    recording = busservo_record.Recording(robot.joints, ["base"], b"\xff\xff\0\0\0\0\xf4\x01")
     return {
         "BusServo": bus,
         "AsyncBusServo": busservo_async.AsyncBusServo(bus),
@@ -70,6 +73,9 @@ def instances():
         "Teleop": busservo_teleop.Teleop(
             robot, busservo_motion.Robot(bus, {"base": busservo_motion.Joint(2)})
         ),
+        "Recorder": busservo_record.Recorder(robot, limp=False),
+        "Recording": recording,
+        "Playback": recording.play(busservo_motion.Robot(bus, {"base": robot.joints["base"]})),
     }
 
 
