@@ -203,9 +203,23 @@ _USAGE = """usage: busservo COMMAND ...
   busservo panel PORT --password P [--port N] [--host H] [%(checked)s]
                                        the browser panel, at http://127.0.0.1:N/ (8080), on
                                        every interface or H's (--host 127.0.0.1: this one)
+  busservo record PORT FILE [--seconds S]
+                                       the joints go limp: move the arm by hand; records
+                                       until Ctrl-C (or S seconds) into FILE (.jsonl: JSON
+                                       lines, else the compact form)
+  busservo play PORT FILE [--speed X] [%(checked)s]
+                                       play a recording: into its first pose at 30
+                                       degrees/s, then at its pace, X times (0.25..2, 1);
+                                       Ctrl-C stops it where it is
+  busservo teleop LEADER [FOLLOWER] --leader-calibration F1
+                  --follower-calibration F2 [%(checked)s]
+                                       the leader arm, limp, moved by hand, drives the
+                                       follower live (each arm's robot.json: F1, F2); one
+                                       PORT: both arms on its bus; Ctrl-C stops it
   busservo --version                   busservo's version
 PORT is /dev/ttyUSB0, COM3, ... (a serial port), hid or hid:PATH (a USB HID controller: the
 first found, or that one), or --sim: a simulated controller, servos 1..6 (nothing real moves).
+The robot is the calibration in robot.json, in the folder you run from, else the demo's arm.
 --json: ports, check, scan, positions and move print JSON (and their words to stderr).
 --timeout MS: how long each query waits for its answer (500 ms, and 10 ms more an id).
 Anything that moves asks for %(checked)s: check first that the servos can turn
@@ -222,8 +236,20 @@ _TAKES = {
     "group": ("--timeout",),
     "stop": ("--timeout",),
     "panel": ("--password", "--port", "--host", "--timeout"),
+    "record": ("--seconds", "--timeout"),
+    "play": ("--speed",),
+    "teleop": ("--leader-calibration", "--follower-calibration", "--timeout"),
 }
-_VALUED = {"--password": "P", "--port": "N", "--host": "H", "--timeout": "MS"}
+_VALUED = {
+    "--password": "P",
+    "--port": "N",
+    "--host": "H",
+    "--timeout": "MS",
+    "--seconds": "S",
+    "--speed": "X",
+    "--leader-calibration": "F1",
+    "--follower-calibration": "F2",
+}
 _FLAGS = ("--json", _CHECKED, "-h", "--help", "-V", "--version")
 # The command's queries wait this long for an answer (and _PER_ID_MS more a servo asked, for
 # the wire's 4 more bytes and the servo the controller asks): USB adds its latency to the
@@ -262,7 +288,7 @@ class _Run:
         if "--timeout" in options:
             self.timeout = _int(options["--timeout"], "--timeout", 1, 60000)
         self.port = None
-        self.uart = None  # the port, once open: main() closes it
+        self.uarts = []  # the ports, once open: main() closes them
         self.waited = _TIMEOUT_MS  # the last query's timeout, for the words when it ran out
 
     def ms(self, ids=0):
@@ -336,17 +362,21 @@ def _open(port):
     return serial_port(port)
 
 
-def _bus(run):
+def _bus(run, port=None, servos=_SIM_SERVOS):
+    # A BusServo on PORT (run.port, or port), and whether it is the simulated controller
+    # (its servos: servos).
     import busservo
 
-    if run.port == "--sim":
+    port = port or run.port
+    if port == "--sim":
         import busservo_sim
 
         sim = busservo_sim.SimController()
-        sim.missing.update(i for i in range(256) if i not in _SIM_SERVOS)  # as a 6-servo arm
+        sim.missing.update(i for i in range(256) if i not in servos)  # as a 6-servo arm
         return busservo.BusServo(sim), True
-    run.uart = _open(run.port)
-    return busservo.BusServo(run.uart), False
+    uart = _open(port)
+    run.uarts.append(uart)
+    return busservo.BusServo(uart), False
 
 
 def _checklist(run, out):
@@ -642,6 +672,235 @@ def _serve(robot, key, tcp, host):
     return 0
 
 
+# Recording, playback and a leader driving a follower (busservo_record, busservo_teleop).
+
+_PLAY_DPS = 30  # a recording goes into its first pose, and a follower to the leader's, at this
+_RATE_S = 1  # teleop says its rate this often (seconds)
+
+
+def _number(text, what, low, high):
+    try:
+        value = float(text)
+    except ValueError:
+        value = None
+    if value is None or not low <= value <= high:  # (nan is in no range)
+        raise _Usage("%s must be a number in %g..%g, got %r" % (what, low, high, text))
+    return value
+
+
+def _file(path, what):
+    # The file at path must be there (a usage error, not a traceback, if not).
+    if not os.path.exists(path):
+        raise _Usage("no such file %s (%s)" % (path, what))
+    if os.path.isdir(path):
+        raise _Usage("%s is a folder, not %s" % (path, what))
+
+
+def _halt(robot, run):
+    # Ctrl-C: each joint of robot stops where it is (read, then held there in _HALT_MS), as
+    # move's Ctrl-C and the panel's STOP do. {servo_id: position or None}.
+    ids = [robot.joints[name].servo_id for name in robot.names]
+    at = robot.bus.read_positions(ids, run.ms(len(ids)))
+    held = [(i, at[i]) for i in ids if at[i] is not None]
+    if held:
+        robot.bus.move_many(held, _HALT_MS)
+    return at
+
+
+def _record(run, words, options):
+    import busservo_record
+
+    if len(words) != 1:
+        raise _Usage("record wants PORT FILE")
+    path = words[0]
+    seconds = None
+    if "--seconds" in options:
+        seconds = _number(options["--seconds"], "--seconds", 0.1, 86400)
+    folder = os.path.dirname(path) or "."
+    if not os.path.isdir(folder):
+        raise _Usage("no folder %s for FILE %s" % (folder, path))
+    if os.path.isdir(path):
+        raise _Usage("%s is a folder: FILE is the recording's file" % path)
+    bus, _ = _bus(run)
+    robot = _robot(bus, None)
+    _answers(bus, run)
+    ids = [robot.joints[name].servo_id for name in robot.names]
+    print(
+        "the joints %s (servos %s) go limp: move the arm by hand" % (", ".join(robot.names), ids)
+    )
+    print(
+        "recording into %s %s" % (path, "for %g s" % seconds if seconds else "(Ctrl-C ends it)"),
+        flush=True,
+    )
+    recorder = busservo_record.Recorder(robot, path=path, timeout_ms=run.timeout)
+    start = time.monotonic()
+    try:
+        while seconds is None or time.monotonic() - start < seconds:
+            recorder.step()  # never waits for the wire
+            time.sleep(0.001)
+    except KeyboardInterrupt:
+        pass  # the normal end of a recording
+    recording = recorder.stop()
+    print(
+        "saved %s: %d samples over %.1f s, %d reads missed"
+        % (path, len(recording), recording.duration_ms / 1000, recorder.missed)
+    )
+    if not len(recording):
+        print("no sample: no read was answered (the servos' power, the bus cable, their ids)")
+        return 1
+    return 0
+
+
+def _recording(path):
+    # The Recording in path, or a usage error saying why not.
+    import busservo_record
+
+    _file(path, "a recording: busservo record makes one")
+    try:
+        recording = busservo_record.Recording.load(path)
+    except (ValueError, TypeError) as e:  # its words name the file
+        raise _Usage(str(e))
+    if not len(recording):
+        raise _Usage("%s holds no sample" % path)
+    return recording
+
+
+def _play(run, words, options):
+    if len(words) != 1:
+        raise _Usage("play wants PORT FILE")
+    speed = _number(options.get("--speed", "1"), "--speed", 0.25, 2)
+    path = words[0]
+    recording = _recording(path)
+    bus, simulated = _bus(run)
+    robot = _robot(bus, None)
+    alien = [name for name in recording.names if name not in robot.joints]
+    if alien:
+        raise _BadFile(
+            "%s records joints %s, which the robot has not (its joints: %s; robot.json in the "
+            "folder you run from says them)" % (path, ", ".join(alien), ", ".join(robot.names))
+        )
+    ids = [robot.joints[name].servo_id for name in recording.names]
+    print("the servos are at", bus.read_positions(ids, run.ms(len(ids))))
+    print(
+        "this plays %s (%d samples, %.1f s) on servos %s at %gx: into its first pose at %d "
+        "degrees/s, then at its pace"
+        % (path, len(recording), recording.duration_ms / 1000, ids, speed, _PLAY_DPS)
+    )
+    if not (_CHECKED in options or simulated):
+        print("nothing moved: check that they can turn freely, then add " + _CHECKED)
+        return 1
+    player = recording.play(robot, speed=speed, dps=_PLAY_DPS)
+    print("playing (Ctrl-C stops it)", flush=True)
+    start = time.monotonic()
+    try:
+        player.wait()
+    except KeyboardInterrupt:
+        at = _halt(robot, run)
+        print(
+            "stopped at sample %d of %d: the servos hold at %s"
+            % (player.index + 1, len(recording), at)
+        )
+        return 130
+    print(
+        "played %s in %.1f s%s"
+        % (
+            path,
+            time.monotonic() - start,
+            ", %d moves slowed by a joint's dps" % player.slowed if player.slowed else "",
+        )
+    )
+    return 0
+
+
+def _calibration(path, what):
+    # The joints of the calibration in path (a Robot on no bus yet), or a usage error.
+    import busservo_motion
+
+    _file(path, "%s: a robot.json" % what)
+    try:
+        return busservo_motion.Robot.load(None, path)
+    except (ValueError, TypeError) as e:  # its words name the file
+        raise _Usage("%s: %s" % (what, e))
+
+
+def _teleop(run, words, options):
+    import busservo_motion
+    import busservo_teleop
+
+    if len(words) > 1:
+        raise _Usage("teleop wants LEADER [FOLLOWER]: two ports, or one with both arms on it")
+    lpath = options.get("--leader-calibration")
+    fpath = options.get("--follower-calibration")
+    if not lpath or not fpath:
+        raise _Usage(
+            "teleop wants --leader-calibration F1 and --follower-calibration F2 "
+            "(each arm's robot.json)"
+        )
+    lead = _calibration(lpath, "--leader-calibration")
+    follow = _calibration(fpath, "--follower-calibration")
+    lids = [lead.joints[name].servo_id for name in lead.names]
+    fids = [follow.joints[name].servo_id for name in follow.names]
+    shared = not words
+    if shared and set(lids) & set(fids):
+        raise _Usage(
+            "on one bus the arms need their own servo ids: %s and %s both have servos %s "
+            "(give the follower's port too, if it has a controller of its own)"
+            % (lpath, fpath, sorted(set(lids) & set(fids)))
+        )
+    if not set(lead.names) & set(follow.names):
+        raise _Usage(
+            "%s and %s share no joint name: the leader's are %s, the follower's %s"
+            % (lpath, fpath, ", ".join(lead.names), ", ".join(follow.names))
+        )
+    if shared:
+        lbus, simulated = _bus(run, servos=lids + fids)
+        fbus = lbus
+    else:
+        lbus, simulated = _bus(run, servos=lids)
+        fbus, fsim = _bus(run, words[0], servos=fids)
+        simulated = simulated and fsim
+    leader = busservo_motion.Robot(lbus, lead.joints)
+    follower = busservo_motion.Robot(fbus, follow.joints)
+    print("the leader's servos are at", lbus.read_positions(lids, run.ms(len(lids))))
+    print("the follower's servos are at", fbus.read_positions(fids, run.ms(len(fids))))
+    print(
+        "this lets the leader's joints go limp (what they hold up falls), and the follower "
+        "goes to its pose at %d degrees/s, then follows it" % _PLAY_DPS
+    )
+    if not (_CHECKED in options or simulated):
+        print("nothing moved: hold the leader, check that the follower can turn freely, then")
+        print("add " + _CHECKED)
+        return 1
+    teleop = busservo_teleop.Teleop(leader, follower, dps=_PLAY_DPS, timeout_ms=run.timeout)
+    teleop.warn = lambda text: print(text, flush=True)
+    print("the leader drives the follower (Ctrl-C stops it)", flush=True)
+    then = time.monotonic()
+    reads = 0
+    try:
+        while not teleop.done:
+            teleop.step()  # never waits for the wire
+            now = time.monotonic()
+            if now - then >= _RATE_S:
+                print(
+                    "%.1f cycles a second, %s"
+                    % (
+                        (teleop.reads - reads) / (now - then),
+                        "following"
+                        if teleop.engaged
+                        else "going to the leader's pose at %d degrees/s" % _PLAY_DPS,
+                    ),
+                    flush=True,
+                )
+                then, reads = now, teleop.reads
+            time.sleep(0.0005)
+    except KeyboardInterrupt:
+        teleop.stop()
+        at = _halt(follower, run)
+        print("stopped: the follower holds at %s; the leader is limp" % at)
+        return 130
+    return 0
+
+
 _COMMANDS = {
     "ports": _ports,
     "check": _check,
@@ -652,6 +911,9 @@ _COMMANDS = {
     "group": _group,
     "stop": _stop,
     "panel": _panel,
+    "record": _record,
+    "play": _play,
+    "teleop": _teleop,
 }
 
 
@@ -708,9 +970,10 @@ def main(argv=None):
     except KeyboardInterrupt:
         return 130
     finally:
-        close = getattr(run and run.uart, "close", None)
-        if close:
-            close()
+        for uart in run.uarts if run else ():
+            close = getattr(uart, "close", None)
+            if close:
+                close()
 
 
 def _entry():

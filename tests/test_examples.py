@@ -25,9 +25,11 @@ EXPECT = {
     "move_many.py": "now at [200, 350, 500, 650, 800, 950]",
     "playback.py": "estop: group stopped, joints limp",
     "positions.py": "servo 6 at 500",
+    "record.py": "played back",
     "speed.py": "action group 1 at 50 %, the others at 100 %",
     "stream.py": "updates/s (the wire's limit for 6 servos: 38.4)",
     "teach.py": "the joints are limp: pose the robot by hand",
+    "teleop.py": "done: ",
     "unload.py": "posed at",
     "web_panel.py": "open http://127.0.0.1:PORT/ and log in with the password test-pw-1",
 }
@@ -90,6 +92,7 @@ MOVING = ("async_demo.py", "demo.py", "group.py", "move.py", "move_many.py", "un
 # The motion layer's: on a board their joints turn at most 30 degrees a second (DPS), which
 # their moves' times show, rather than 2 s a move (a stream's frames take ~26 ms each).
 MOTION = ("calibrate.py", "playback.py", "stream.py", "teach.py", "web_panel.py")
+MOTION += ("record.py", "teleop.py")  # busservo_record's, busservo_teleop's
 MOVING += MOTION
 
 # The controller's commands that make servos move (or go limp).

@@ -429,6 +429,54 @@ class OnAPty(Scratch):
             self.assertEqual((port, host), (8080, "127.0.0.1"))
             self.assertEqual({robot.joints[name].dps for name in robot.names}, {None})
 
+    def test_play_and_teleop_move_nothing_until_told(self):
+        here = os.getcwd()
+        os.chdir(self.scratch)
+        try:
+            write_recording("wave.jsonl", seconds=1)
+            leader, follower = write_calibrations(self.scratch)
+            for command in (
+                ("play", self.link, "wave.jsonl"),
+                (
+                    "teleop",
+                    self.link,
+                    "--leader-calibration",
+                    leader,
+                    "--follower-calibration",
+                    follower,
+                ),
+            ):
+                status, out, err = busservo_command(*command)
+                self.assertEqual(status, 1, out + err)
+                self.assertIn("500", out)  # where the servos are, read first
+                self.assertIn("this ", out)  # what it would do
+                self.assertIn("nothing moved", out)
+                self.assertIn(CHECKED, out)
+        finally:
+            os.chdir(here)
+        self.assertEqual(
+            busservo_command("positions", self.link, 1, 4),
+            (0, "1: 500\n4: 500\n", ""),
+        )
+
+    def test_ctrl_c_stops_a_recording_playing_where_the_servo_is(self):
+        # The base turns 0..90 degrees over 10 s (500..875): stopped 1.5 s in, it holds there.
+        path = os.path.join(self.scratch, "slow.jsonl")
+        write_recording(path, seconds=10, degrees=90)
+        play = command_process("play", self.link, path, CHECKED, cwd=self.scratch)
+        said = read_until(play, "playing (Ctrl-C stops it)")
+        time.sleep(1.5)
+        status, out, err = ctrl_c(play)
+        self.assertEqual(status, 130, said + out + err)
+        self.assertIn("stopped at sample ", out)
+        time.sleep(0.3)  # the stop's own 100 ms
+        _, first, _ = busservo_command("positions", self.link, 1)
+        time.sleep(0.5)  # 20 positions more on the way, had it gone on
+        self.assertEqual(busservo_command("positions", self.link, 1), (0, first, ""))
+        at = int(first.split()[1])
+        self.assertTrue(500 < at < 875, first)
+        self.assertIn("the servos hold at {1: %d" % at, out)
+
 
 class ScriptedPeers(WithPeers):
     """The command against a controller scripted in the test: silent, slow, or talking
@@ -1048,6 +1096,304 @@ class APtyThatAnswersAtOnce(Scratch):
             self.assertTrue(bus.early > 0, bus.early)
         status, out, err = busservo_command("positions", self.link, 1, 2)
         self.assertEqual((status, out), (0, "1: 500\n2: 500\n"), err)
+
+
+def joints_line(joints):
+    """A recording's first line (JSON lines): the joints {name: busservo_motion.Joint}."""
+    import json
+
+    names = sorted(joints, key=lambda name: joints[name].servo_id)
+    return json.dumps({"names": names, "joints": {n: joints[n].config() for n in names}})
+
+
+def write_recording(path, seconds=10, every_ms=30, degrees=90):
+    """A recording (JSON lines) of the demo's arm: its base turning 0..degrees over seconds."""
+    import json
+
+    import busservo_board
+
+    lines = [joints_line(busservo_board.joints())]
+    end = int(seconds * 1000)
+    for t in range(0, end + 1, every_ms):
+        pose = {"base": round(degrees * t / end, 2), "shoulder": 0, "elbow": 0, "claw": 0}
+        lines.append(json.dumps({"t": t, "pose": pose}))
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+def write_calibrations(folder, follower_trim=0):
+    """leader.json (servos 1..3) and follower.json (servos 4..6), as Robot.save() writes them:
+    their paths."""
+    import json
+
+    paths = []
+    for name, first, trim in (("leader", 1, 0), ("follower", 4, follower_trim)):
+        joints = {"base": {"servo_id": first, "trim": trim}, "shoulder": {"servo_id": first + 1}}
+        joints["elbow"] = {"servo_id": first + 2}
+        path = os.path.join(folder, name + ".json")
+        with open(path, "w") as f:
+            json.dump({"joints": joints}, f)
+        paths.append(path)
+    return paths
+
+
+def read_until(process, text, seconds=20):
+    """What process printed up to the line that holds text (or its end)."""
+    said = ""
+    end = time.monotonic() + seconds
+    while text not in said and time.monotonic() < end:
+        line = process.stdout.readline()
+        if not line:
+            break
+        said += line
+    return said
+
+
+def ctrl_c(process):
+    """Ctrl-C, then (status, stdout, stderr) once it has ended."""
+    try:
+        process.send_signal(signal.SIGINT)
+        out, err = process.communicate(timeout=20)
+    finally:
+        process.kill()
+        process.wait()
+    return process.returncode, out, err
+
+
+class RecordPlayTeleop(Scratch):
+    """busservo record, play and teleop (issue 29): on the simulated controller, in the
+    folder of the test's own (where robot.json would be, and the recordings go)."""
+
+    def setUp(self):
+        super().setUp()
+        self.here = os.getcwd()
+        os.chdir(self.scratch)
+
+    def tearDown(self):
+        os.chdir(self.here)
+        super().tearDown()
+
+    def test_record_keeps_what_it_reads_and_play_plays_it(self):
+        import busservo_record
+
+        for name in ("demo.jsonl", "demo.rec"):  # JSON lines, and the compact form
+            status, out, err = busservo_command("record", "--sim", name, "--seconds", 0.5)
+            self.assertEqual(status, 0, out + err)
+            self.assertIn("the joints base, shoulder, elbow, claw (servos [1, 2, 3, 4]) go", out)
+            recording = busservo_record.Recording.load(name)
+            self.assertEqual(recording.names, ["base", "shoulder", "elbow", "claw"])
+            self.assertGreater(len(recording), 5)  # a read takes ~27 ms at 9600 baud
+            self.assertIn(
+                "saved %s: %d samples over %.1f s, 0 reads missed"
+                % (name, len(recording), recording.duration_ms / 1000),
+                out,
+            )
+            status, out, err = busservo_command("play", "--sim", name, "--speed", 2)
+            self.assertEqual(status, 0, out + err)
+            self.assertIn("this plays %s (%d samples" % (name, len(recording)), out)
+            self.assertIn("at 2x: into its first pose at 30 degrees/s", out)
+            self.assertIn("played %s in" % name, out)
+
+    def test_play_goes_to_the_first_pose_then_at_the_recorded_pace(self):
+        write_recording("wave.jsonl", seconds=1, degrees=20)
+        status, out, err = busservo_command("play", "--sim", "wave.jsonl", "--speed", 0.5)
+        self.assertEqual(status, 0, out + err)
+        took = float(out.split("played wave.jsonl in ")[1].split()[0])
+        self.assertGreater(took, 1.9)  # 1 s at half speed: no shorter (longer on a busy machine)
+
+    def test_ctrl_c_ends_a_recording_and_it_is_saved(self):
+        record = command_process("record", "--sim", "hand.jsonl", cwd=self.scratch)
+        said = read_until(record, "Ctrl-C ends it")
+        time.sleep(0.5)
+        status, out, err = ctrl_c(record)
+        self.assertEqual(status, 0, said + out + err)  # the normal end of a recording
+        self.assertIn("recording into hand.jsonl (Ctrl-C ends it)", said)
+        self.assertIn("saved hand.jsonl: ", out)
+        self.assertNotIn("Traceback", err)
+        with open(os.path.join(self.scratch, "hand.jsonl")) as f:
+            self.assertGreater(len(f.readlines()), 2)
+
+    def test_bad_input_is_a_usage_line_not_a_traceback(self):
+        write_recording("good.jsonl", seconds=1)
+        with open("bad.jsonl", "w") as f:
+            f.write('{"names": ["base"')
+        with open("empty.jsonl", "w") as f:
+            f.write(joints_line({"base": busservo_motion_joint(1)}) + "\n")
+        with open("line3.jsonl", "w") as f:
+            f.write(joints_line({"base": busservo_motion_joint(1)}) + "\n")
+            f.write('{"t": 0, "pose": {"base": 0}}\n{"t": 30, "pose": {}}\n')
+        os.mkdir("folder")
+        leader, follower = write_calibrations(self.scratch)
+        with open("broken.json", "w") as f:
+            f.write('{"joints": ')
+        calibrations = ("--leader-calibration", leader, "--follower-calibration", follower)
+        for command, words in (
+            (("record", "--sim"), "record wants PORT FILE"),
+            (("record", "--sim", "a.jsonl", "b.jsonl"), "record wants PORT FILE"),
+            (("record", "--sim", "no/such/a.jsonl"), "no folder no/such for FILE"),
+            (("record", "--sim", "folder"), "folder is a folder"),
+            (("record", "--sim", "a.rec", "--seconds", 0), "--seconds must be a number in 0.1"),
+            (("record", "--sim", "a.rec", "--seconds", "x"), "got 'x'"),
+            (("record", "--sim", "a.rec", "--speed", 1), "record takes no --speed"),
+            (("play", "--sim"), "play wants PORT FILE"),
+            (("play", "--sim", "good.jsonl", "--speed", 3), "--speed must be a number in 0.25..2"),
+            (("play", "--sim", "good.jsonl", "--speed", 0.1), "got '0.1'"),
+            (("play", "--sim", "good.jsonl", "--speed", "nan"), "got 'nan'"),
+            (("play", "--sim", "missing.jsonl"), "no such file missing.jsonl"),
+            (("play", "--sim", "folder"), "folder is a folder"),
+            (("play", "--sim", "bad.jsonl"), "bad.jsonl: its first line must be the joints"),
+            (("play", "--sim", "empty.jsonl"), "empty.jsonl holds no sample"),
+            (("play", "--sim", "line3.jsonl"), "line3.jsonl, line 3: a sample must be"),
+            (("play", "--sim", "good.jsonl", "--seconds", 1), "play takes no --seconds"),
+            (("teleop", "--sim"), "teleop wants --leader-calibration F1 and"),
+            (("teleop", "--sim", "--leader-calibration", leader), "--follower-calibration F2"),
+            (("teleop", "--sim", "--sim", "--sim") + calibrations, "teleop wants LEADER [FOL"),
+            (
+                (
+                    "teleop",
+                    "--sim",
+                    "--leader-calibration",
+                    "no.json",
+                    "--follower-calibration",
+                    follower,
+                ),
+                "no such file no.json (--leader-calibration: a robot.json)",
+            ),
+            (
+                (
+                    "teleop",
+                    "--sim",
+                    "--leader-calibration",
+                    leader,
+                    "--follower-calibration",
+                    "broken.json",
+                ),
+                "--follower-calibration: broken.json: not valid JSON",
+            ),
+            (
+                (
+                    "teleop",
+                    "--sim",
+                    "--leader-calibration",
+                    leader,
+                    "--follower-calibration",
+                    leader,
+                ),
+                "on one bus the arms need their own servo ids",
+            ),
+        ):
+            status, out, err = busservo_command(*command)
+            self.assertEqual((status, out), (2, ""), command)
+            self.assertIn(words, err, command)
+            self.assertIn("(busservo --help)", err, command)
+            self.assertNotIn("Traceback", err, command)
+
+    def test_a_silent_controller_gets_the_checklist(self):
+        peer = Peer(delay=None)
+        try:
+            write_recording("wave.jsonl", seconds=1)
+            leader, follower = write_calibrations(self.scratch)
+            for command in (
+                ("record", peer.path, "r.jsonl"),
+                ("play", peer.path, "wave.jsonl", CHECKED),
+                (
+                    "teleop",
+                    peer.path,
+                    "--leader-calibration",
+                    leader,
+                    "--follower-calibration",
+                    follower,
+                    CHECKED,
+                ),
+            ):
+                status, out, err = busservo_command(*command)
+                self.assertEqual(status, 1, command)
+                self.assertIn("no answer from the controller on %s within" % peer.path, out + err)
+                self.assertNotIn("Traceback", err)
+            self.assertFalse(os.path.exists("r.jsonl"))
+        finally:
+            peer.close()
+
+    def test_help_says_them(self):
+        out = busservo_command("--help")[1]
+        for command in ("record PORT FILE", "play PORT FILE", "teleop LEADER [FOLLOWER]"):
+            self.assertIn("busservo " + command, out)
+
+    def test_a_recording_of_joints_the_robot_has_not_is_refused_by_name(self):
+        with open("other.jsonl", "w") as f:
+            f.write(joints_line({"wrist": busservo_motion_joint(5)}) + "\n")
+            f.write('{"t": 0, "pose": {"wrist": 0}}\n')
+        status, out, err = busservo_command("play", "--sim", "other.jsonl", CHECKED)
+        self.assertEqual((status, out), (2, ""), err)
+        self.assertIn("other.jsonl records joints wrist, which the robot has not", err)
+
+    def test_teleop_says_its_rate_warns_and_ctrl_c_stops_the_follower(self):
+        # One bus (the leader's servos 1..3, the follower's 4..6) and two: the follower's
+        # base calibrated 5 degrees off the leader's, which the start warns of.
+        leader, follower = write_calibrations(self.scratch, follower_trim=5)
+        calibrations = ("--leader-calibration", leader, "--follower-calibration", follower)
+        for ports in (("--sim",), ("--sim", "--sim")):
+            teleop = command_process("teleop", *ports + calibrations, cwd=self.scratch)
+            said = read_until(teleop, "cycles a second")
+            said += read_until(teleop, "cycles a second")  # a second's rate, whole
+            status, out, err = ctrl_c(teleop)
+            self.assertEqual(status, 130, said + out + err)
+            self.assertIn("the leader drives the follower (Ctrl-C stops it)", said)
+            self.assertIn(
+                "joint 'base': at rest the leader reads 0.0 degrees and the follower -5.0", said
+            )
+            rate = float(said.rsplit(" cycles a second", 1)[0].rsplit("\n", 1)[1])
+            self.assertGreater(rate, 5, said)  # (~26..40 a second: figures, not asserted)
+            self.assertIn("stopped: the follower holds at {4: ", out)
+            self.assertIn("the leader is limp", out)
+            self.assertNotIn("Traceback", err)
+
+    def test_teleop_names_a_joint_that_does_not_answer(self):
+        # The leader's servo 2 (its shoulder) does not answer: the follower holds, and the
+        # joint is named. Ctrl-C comes from the command's loop's 300th nap.
+        import busservo_sim
+
+        class Deaf(busservo_sim.SimController):
+            def __init__(self, *args, **kwargs):
+                super().__init__(*args, **kwargs)
+                self.missing.add(2)
+
+        sleep = time.sleep
+        naps = []
+
+        def nap(seconds):
+            naps.append(seconds)
+            if len(naps) == 300:
+                raise KeyboardInterrupt
+            sleep(seconds)
+
+        leader, follower = write_calibrations(self.scratch)
+        with mock.patch.object(busservo_sim, "SimController", Deaf):
+            with mock.patch.object(busservo_host.time, "sleep", nap):
+                status, out, err = busservo_command(
+                    "teleop",
+                    "--sim",
+                    "--sim",
+                    "--leader-calibration",
+                    leader,
+                    "--follower-calibration",
+                    follower,
+                    "--timeout",
+                    100,
+                )
+        self.assertEqual(status, 130, out + err)
+        self.assertIn("the leader's servos are at {1: 500, 2: None, 3: 500}", out)
+        self.assertIn(
+            "busservo_teleop: joint 'shoulder': the leader's servo 2 does not answer", out
+        )
+        self.assertIn("the follower holds", out)
+        self.assertIn("stopped: the follower holds at {4: 500, 5: 500, 6: 500}", out)
+
+
+def busservo_motion_joint(servo_id):
+    import busservo_motion
+
+    return busservo_motion.Joint(servo_id)
 
 
 if __name__ == "__main__":
