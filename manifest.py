@@ -8,7 +8,7 @@
 # they stand on.
 # web=True freezes the web panel (busservo_web) too; it needs its page copied to the board's
 # /lib: mpremote cp lib/busservo_web.html.gz :/lib/ (its jog needs arm=True, its calibration
-# page calibration=True)
+# page calibration=True, its recording record=True and its teleop teleop=True)
 # No metadata(): included, it would become the whole firmware's (and a second library's would
 # fail with "Duplicate call to metadata()"). busservo.__version__ says the driver's version.
 options.defaults(
@@ -43,6 +43,7 @@ if options.web:
     module("busservo_web_teach.py", base_path="lib")
     module("busservo_web_jog.py", base_path="lib")
     module("busservo_web_calibrate.py", base_path="lib")
+    module("busservo_web_record.py", base_path="lib")
 if options.arm:
     module("busservo_arm.py", base_path="lib")
 if options.calibration:

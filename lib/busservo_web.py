@@ -75,6 +75,11 @@
 #   panel.busy                          (part, why) while a part holds the joints (a
 #                                       sequence playing, a calibration), else None
 #   panel.read_ms                       how often positions are read while a page is open
+#                                       (None: a part reads them itself, as a recording
+#                                       does, and the loop asks for none)
+#   panel.options                       {name: value}: what the program gave serve() for
+#                                       the parts, as serve(robot, password, leader=robot2)
+#                                       (busservo_web_record's teleop reads "leader")
 #   Refused(status, why), need(body, key, kind, low, high, what): refusals, and checks
 import asyncio
 import json
@@ -109,14 +114,16 @@ _ERROR_MS = const(3000)  # the loop's last error shows this long after it last h
 _POSITIONS = 21  # busservo.CMD_MULT_SERVO_POS_READ: a reply of positions
 # The parts serve() plugs in: (module, None: at once; or NAME: when /api/NAME is first asked
 # for, or, with a condition, when condition(panel) holds: at the start, or once a
-# calibration is saved). The jog and the calibration page are loaded only when used: a panel
-# without an arm keeps their RAM, and busservo_arm's and busservo_calibrate's, for the
-# robot's program.
+# calibration is saved; NAME may be a tuple of names, any of which plugs it in). The jog, the
+# calibration page and the recording are loaded only when used: a panel without an arm keeps
+# their RAM, and busservo_arm's, busservo_calibrate's and busservo_record's, for the robot's
+# program.
 PARTS = (
     ("busservo_web_sliders", None),
     ("busservo_web_teach", None),
     ("busservo_web_jog", "jog", lambda panel: panel.arm or panel.saved("links")),
     ("busservo_web_calibrate", "calibrate"),
+    ("busservo_web_record", ("record", "replay", "teleop"), lambda p: "leader" in p.options),
 )
 
 # The page: beside this module (installed by mip or mpremote, or on the unix port), else in
@@ -340,7 +347,7 @@ class Panel:
     and the HTTP side, for serve(); the parts plug into it (attach(panel)). A test may
     drive one directly."""
 
-    def __init__(self, robot, password, arm=None, path=None, page=None, parts=PARTS):
+    def __init__(self, robot, password, arm=None, path=None, page=None, parts=PARTS, options=None):
         if type(password) is not str or len(password) < 8:
             # Why, never the password itself: the message may end up in a log or on a screen.
             got = type(password).__name__
@@ -350,6 +357,7 @@ class Panel:
         if arm is not None and arm.robot is not robot:
             raise ValueError("arm must be an Arm on robot")
         self.arm = arm  # the program's Arm to jog, if it gave one (the jog part's)
+        self.options = options or {}  # what the program gave the parts (serve()'s **options)
         # The calibration file: an arm's links, and where a calibration goes.
         self.path = path or bm.CALIBRATION
         self.page = page or PAGE
@@ -393,10 +401,11 @@ class Panel:
 
     def plug(self, module, route=None, condition=None):
         """Plug in the part of module (its attach(self)): now, or with route (NAME), when
-        /api/NAME is first asked for, or condition(self) holds (now, or once a calibration
-        is saved). The one way parts are loaded."""
+        /api/NAME is first asked for (route: NAME, or a tuple of them), or condition(self)
+        holds (now, or once a calibration is saved). The one way parts are loaded."""
         if route and not (condition and condition(self)):
-            self._later[route] = module
+            for name in (route,) if type(route) is str else route:
+                self._later[name] = module
             if condition:
                 self._lazy.append((module, condition))
         elif module not in self.parts:
@@ -598,7 +607,9 @@ class Panel:
             return  # the stream, a sequence and a route's query come first
         open_ = time.ticks_diff(now, self._seen) < _OPEN_MS
         every = self.read_ms if open_ else _OPEN_MS
-        if time.ticks_diff(now, self._read) >= every:
+        if self.read_ms is None:
+            pass  # a part reads the positions itself: a read of the loop's would cut in
+        elif time.ticks_diff(now, self._read) >= every:
             self._read = now
             bus.request_positions(self._ids)
         elif open_ and time.ticks_diff(now, self._battery) >= _BATTERY_MS:
@@ -695,7 +706,7 @@ class Panel:
                 handler = None
                 if name.isalpha() and method in ("GET", "POST"):
                     if name in self._later:  # a part plugged in when first asked for
-                        self.plug(self._later.pop(name))
+                        self.plug(self._later.pop(name))  # (plugged in once: by any name)
                     attr = "%s_%s" % (method.lower(), name)
                     handler = getattr(self, "_" + attr, None)  # the core's own
                     for part in self._parts:
@@ -766,7 +777,15 @@ class Panel:
 
 
 async def serve(
-    robot, password, port=80, arm=None, path=None, host="0.0.0.0", parts=PARTS, page=None
+    robot,
+    password,
+    port=80,
+    arm=None,
+    path=None,
+    host="0.0.0.0",
+    parts=PARTS,
+    page=None,
+    **options,
 ):
     """Serve the panel for robot on port, on host's interface (default: every one), until
     cancelled. password: a str of 8 or more characters, which the page asks for. arm: a
@@ -774,8 +793,10 @@ async def serve(
     path: the calibration file (default busservo_motion.CALIBRATION: an arm's links, and
     where the calibration page saves).
     parts: the parts to plug in, as PARTS gives them (all of them). page: the page's file
-    (default: beside this module)."""
-    panel = Panel(robot, password, arm, path, page, parts)
+    (default: beside this module). options: settings for the parts, kept as panel.options
+    (leader=robot2: a leader arm that drives robot, turned on and off from the page, as
+    busservo_web_record offers it)."""
+    panel = Panel(robot, password, arm, path, page, parts, options)
     try:
         os.stat(panel.page)
     except OSError:

@@ -71,13 +71,16 @@ async def serve(
     host: str = "0.0.0.0",
     parts: tuple[tuple[Any, ...], ...] = ...,
     page: str | None = None,
+    **options: Any,
 ) -> None:
     """Serve the panel for robot on port, on every interface (or host's: "127.0.0.1" for
     this machine alone), until cancelled. password: a str of 8 or more characters, which
     the page asks for (ValueError otherwise). arm: an Arm on robot for the page to jog (None:
     the one path's links make, if it has any). path: the calibration file
     (busservo_motion.CALIBRATION by default), which the calibration page saves. parts: the
-    parts to plug in (PARTS by default: all). page: the page's file (default: PAGE)."""
+    parts to plug in (PARTS by default: all). page: the page's file (default: PAGE).
+    options: settings for the parts, kept as Panel.options (leader=robot2: a leader Robot
+    that drives robot, turned on and off from the page: busservo_web_record's teleop)."""
 
 class Panel:
     """The panel's core: sessions and arming, STOP, the route table, the state, the loop and
@@ -104,9 +107,12 @@ class Panel:
     way): driving() refuses every other part, saying why."""
     orders: int
     """The number of the last order (order()): a read begun before it is void."""
-    read_ms: int
+    read_ms: int | None
     """How often (ms) the loop reads positions while a page is open (a part may make it
-    shorter while it needs them)."""
+    shorter while it needs them; None: a part reads them itself, and the loop asks for
+    none)."""
+    options: dict[str, Any]
+    """What the program gave serve() for the parts (its **options), as {name: value}."""
     parts: dict[str, Any]
     """{module: its part} of the parts plugged in."""
     robots: int
@@ -123,9 +129,10 @@ class Panel:
         path: str | None = None,
         page: str | None = None,
         parts: tuple[tuple[Any, ...], ...] = ...,
+        options: dict[str, Any] | None = None,
     ) -> None:
         """arm: an Arm on robot (ValueError if on another) for the jog part. parts: as
-        serve() takes them."""
+        serve() takes them; options: its **options."""
     # What the parts use.
     def add(self, part: Any) -> None:
         """Call the methods of part, those it has: await get_NAME(body, token) and
@@ -135,11 +142,14 @@ class Panel:
         came since the last); still(halt), when something else is ordered or the panel
         disarms (halt: a sequence's pose on the way too); await close(), as serve() ends."""
     def plug(
-        self, module: str, route: str | None = None, condition: Callable[[Any], Any] | None = None
+        self,
+        module: str,
+        route: str | tuple[str, ...] | None = None,
+        condition: Callable[[Any], Any] | None = None,
     ) -> None:
         """Plug in the part of module (module.attach(panel), which returns the part): now, or
-        with route (NAME), when /api/NAME is first asked for, or condition(panel) holds (now,
-        or once a calibration is saved)."""
+        with route (NAME, or a tuple of them), when /api/NAME is first asked for, or
+        condition(panel) holds (now, or once a calibration is saved)."""
     def saved(self, key: str) -> bool:
         """True if the calibration file (path) holds key (as {"key": ...})."""
     def order(self, by: Any = None, halt: bool = False) -> int:

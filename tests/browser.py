@@ -749,6 +749,36 @@ class Panel(Browsing):
             box = b.find_element(By.ID, button).find_element(By.XPATH, "ancestor::section")
             self.assertIn(words, box.text)  # shown, not a tooltip a phone never shows
 
+    def test_24_record_stop_and_play_back_and_no_teleop_says_why(self):
+        b = self.browser
+        self.open_and_log_in()
+        self.arm()
+        self.assertFalse(b.find_element(By.ID, "replay").is_enabled())  # nothing recorded yet
+        self.press("record")
+        self.assertIsNotNone(until(lambda: controller()["limp"] == [1, 2, 3, 4], 2.0))
+        self.assertIsNotNone(until(lambda: "Recording" in self.text("rec")), self.text("rec"))
+        self.assertFalse(b.find_element(By.ID, "record").is_enabled())
+        self.assertFalse(b.find_element(By.ID, "play").is_enabled())  # the sequence's too
+        for k in range(11):  # the hands turn the base from -30 to 30 degrees
+            turn((1, position(-30 + 6 * k)))
+            time.sleep(0.08)
+        time.sleep(0.3)
+        self.press("recstop")
+        self.assertIsNotNone(until(lambda: "Recorded" in self.text("rec")), self.text("rec"))
+        self.assertTrue(panel_state()["rec"]["samples"] > 10, panel_state())
+        # The board loaded its recording part: with no leader arm, the page says why no teleop.
+        self.assertIn("No teleop: the program gave no leader arm", self.text("noteleop"))
+        self.assertFalse(b.find_element(By.ID, "teleopbox").is_displayed())
+        turn((1, position(0)))
+        moved = controller()["moved"]
+        Select(b.find_element(By.ID, "recspeed")).select_by_value("2")
+        self.assertIsNotNone(until(lambda: b.find_element(By.ID, "replay").is_enabled()))
+        self.press("replay")
+        self.assertIsNotNone(until(lambda: "Playing at 2x" in self.text("rec")), self.text("rec"))
+        self.assertIsNotNone(until(lambda: not panel_state()["rec"]["playing"], 8.0))
+        self.assertTrue(controller()["moved"] > moved + 3)  # its samples, not one pose
+        self.assertIsNotNone(until(lambda: self.reached(1, 30)), controller())
+
 
 # An arm to jog and calibrate: base, shoulder, elbow and wrist on servos 1..4, with the links
 # of its calibration file (a scratch one: the page's calibration saves there). Its trims put
@@ -1062,6 +1092,36 @@ class Logins(Browsing):
             until(lambda: "too many wrong passwords" in self.text("login").lower()),
             "the login form says: %r" % self.text("login"),
         )
+
+
+class Teleop(Browsing):
+    """A panel whose program gave it a leader arm (web_world.py --leader: servos 11..14)."""
+
+    calibration = ("--leader",)
+
+    def test_1_the_teleop_switch_drives_the_robot_from_the_leader_and_shows_its_rate(self):
+        b = self.browser
+        self.open_and_log_in()
+        self.assertIsNotNone(until(lambda: b.find_element(By.ID, "teleopbox").is_displayed()))
+        self.assertEqual(self.text("noteleop"), "")
+        self.assertFalse(b.find_element(By.ID, "teleop").is_enabled())  # not armed
+        self.arm()
+        self.assertIsNotNone(until(lambda: b.find_element(By.ID, "teleop").is_enabled()))
+        b.find_element(By.ID, "teleop").click()
+        self.assertIsNotNone(until(lambda: panel_state()["teleop"]["on"]), panel_state())
+        self.assertIsNotNone(until(lambda: 11 in controller()["limp"]), controller())
+        turn((11, position(20)))  # the leader's base, by hand
+        self.assertIsNotNone(until(lambda: self.reached(1, 20), 8.0), controller())
+        self.assertIsNotNone(until(lambda: "reads/s" in self.text("hz")), self.text("hz"))
+        self.assertFalse(b.find_element(By.ID, "record").is_enabled())  # it holds the joints
+        b.find_element(By.ID, "teleop").click()  # off
+        self.assertIsNotNone(until(lambda: not panel_state()["teleop"]["on"]), panel_state())
+        self.assertFalse(b.find_element(By.ID, "teleop").is_selected())
+        b.find_element(By.ID, "teleop").click()  # on again, then STOP ends it
+        self.assertIsNotNone(until(lambda: panel_state()["teleop"]["on"]), panel_state())
+        self.press("stop")
+        self.assertIsNotNone(until(lambda: not b.find_element(By.ID, "teleop").is_selected()))
+        self.assertFalse(panel_state()["teleop"]["on"])
 
 
 def _listening(port):

@@ -32,6 +32,7 @@ TESTS = (
     "test_21_without_an_arm_the_jog_section_says_why",
     "test_22_save_selects_the_name_saved_and_clear_and_load_ask_first",
     "test_23_halt_and_limp_say_on_the_page_what_they_do",
+    "test_24_record_stop_and_play_back_and_no_teleop_says_why",
     "test_1_jog_moves_the_tool_point_a_step_and_refuses_what_it_cannot_reach",
     "test_2_stop_ends_a_jog_on_its_way",
     "test_3_ranges_done_before_a_joint_was_swept_is_refused_naming_it_once",
@@ -42,6 +43,7 @@ TESTS = (
     "test_2_after_a_jog_a_finger_on_the_thumb_goes_on_from_where_it_shows",
     "test_3_a_jogs_refusal_goes_when_a_jog_is_taken",
     "test_1_too_many_wrong_passwords_are_answered_in_words",
+    "test_1_the_teleop_switch_drives_the_robot_from_the_leader_and_shows_its_rate",
 )
 
 _run = None

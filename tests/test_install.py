@@ -222,10 +222,13 @@ class MipWeb(unittest.TestCase):
                     "busservo_board.mpy",  # examples/web_panel.py finds board.py through it
                     "busservo_calibrate.mpy",  # its calibration page
                     "busservo_motion.mpy",
+                    "busservo_record.mpy",  # its recording
+                    "busservo_teleop.mpy",  # its teleop
                     "busservo_web.html.gz",
                     "busservo_web.mpy",
                     "busservo_web_calibrate.mpy",  # its parts
                     "busservo_web_jog.mpy",
+                    "busservo_web_record.mpy",
                     "busservo_web_sliders.mpy",
                     "busservo_web_teach.mpy",
                 ],
@@ -410,6 +413,7 @@ class Manifest(unittest.TestCase):
                 "lib/busservo_web_teach.py",
                 "lib/busservo_web_jog.py",
                 "lib/busservo_web_calibrate.py",
+                "lib/busservo_web_record.py",
             ],
         )
         named, meta = self.run_manifest(arm=True, calibration=True)  # both on the motion layer

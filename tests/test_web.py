@@ -14,6 +14,7 @@ import deflate
 import busservo
 import busservo_motion as bm
 import busservo_web
+import busservo_web_record
 import busservo_web_teach
 import web_world
 import wire
@@ -248,11 +249,14 @@ class Package(Tidy):
                 "mpy/busservo_motion.mpy",
                 "mpy/busservo_arm.mpy",  # the panel's jog, imported only with an arm's links
                 "mpy/busservo_calibrate.mpy",  # its calibration page, imported only then
+                "mpy/busservo_record.mpy",  # its recording, imported only when first used
+                "mpy/busservo_teleop.mpy",  # its teleop, imported only when turned on
                 "mpy/busservo_web.mpy",  # the core, and its parts:
                 "mpy/busservo_web_sliders.mpy",
                 "mpy/busservo_web_teach.mpy",
                 "mpy/busservo_web_jog.mpy",
                 "mpy/busservo_web_calibrate.mpy",  # imported when first used
+                "mpy/busservo_web_record.mpy",  # so is this
             ],
         )
         self.assertEqual(package.get("deps", []), [])  # nothing from elsewhere
@@ -1070,8 +1074,8 @@ _panels = []
 _Panel_init = busservo_web.Panel.__init__
 
 
-def _init(self, *args):
-    _Panel_init(self, *args)
+def _init(self, *args, **kw):
+    _Panel_init(self, *args, **kw)
     _panels[:] = [self]
 
 
@@ -2210,3 +2214,237 @@ class Lazy(Tidy):
         ok, out = sh('sh boards/unix.sh -c "%s"' % (script % scratch("none")))
         self.assertTrue(ok, out)
         self.assertEqual(out.strip().split("\n")[-1], "[]", out)
+
+
+def leader_robot(bus):
+    """A leader arm on bus: the same joints as web_world.robot()'s, on servos 11..14."""
+    joints = {"base": 11, "shoulder": 12, "elbow": 13, "claw": 14}
+    limits = {"base": None, "shoulder": (-90, 90), "elbow": (-90, 90), "claw": (0, 60)}
+    return bm.Robot(bus, {n: bm.Joint(i, limits=limits[n]) for n, i in joints.items()})
+
+
+def recorded(scenario, leader=False):
+    """Run scenario(port, world, robot) against a panel whose recording goes to a scratch
+    folder of its own (made and removed here); with leader, the program gives it a leader arm
+    on the same bus (servos 11..14)."""
+    folder = scratch("web-rec")
+    os.mkdir(folder)
+    kept = busservo_web_record.FILE
+    busservo_web_record.FILE = folder + "/recording.rec"
+    world = web_world.live()
+    robot = web_world.robot(world)
+    options = {"leader": leader_robot(robot.bus)} if leader else {}
+    port = free_port()
+
+    async def main():
+        server = asyncio.create_task(busservo_web.serve(robot, PASSWORD, port, **options))
+        await asyncio.sleep_ms(50)
+        try:
+            await scenario(port, world, robot)
+        finally:
+            server.cancel()
+            await asyncio.sleep_ms(20)
+
+    try:
+        asyncio.new_event_loop()
+        asyncio.run(main())
+    finally:
+        busservo_web_record.FILE = kept
+        sh("rm -rf " + folder)
+
+
+def recording_part(panel):
+    return panel.parts.get("busservo_web_record")
+
+
+async def record_sweep(port, world, token, ms=600):
+    """Record the person's hands turning the base from 500 to 700 over about ms, then holding
+    it there for 400 ms; the state once stopped."""
+    status, reply = await http(port, "POST", "/api/record", {"on": True}, token)
+    assert status == 200 and reply["rec"]["recording"], (status, reply)
+    assert await until(lambda: 1 in world.sim.limp)
+    steps = ms // 50
+    for k in range(steps + 1):
+        world.sim.turn(1, 500 + 200 * k // steps)
+        await http(port, "GET", "/api/state", token=token)  # the page, open
+        await asyncio.sleep_ms(50)
+    await polled(port, token, 400)  # held there: the last reads have it
+    status, reply = await http(port, "POST", "/api/record", {"on": False}, token)
+    assert status == 200, (status, reply)
+    return reply
+
+
+class Recording(Tidy):
+    # busservo_web_record: the panel records the limp arm, replays it, and turns a leader's
+    # teleop on and off, each from the armed page, each holding the joints while it runs.
+
+    def test_it_is_loaded_only_when_first_used(self):
+        async def scenario(port, world, robot):
+            token = await armed(port)
+            panel = _panels[-1]
+            self.assertIsNone(recording_part(panel))
+            self.assertFalse("rec" in await state(port, token))
+            await http(port, "POST", "/api/replay", {}, token)  # any of its routes loads it
+            self.assertIsNotNone(recording_part(panel))
+            self.assertEqual((await state(port, token))["teleop"], None)  # no leader given
+
+        recorded(scenario)
+
+    def test_a_recording_is_kept_and_replayed_at_its_pace(self):
+        async def scenario(port, world, robot):
+            token = await armed(port)
+            panel = _panels[-1]
+            status, reply = await http(port, "POST", "/api/record", {"on": True}, token)
+            self.assertEqual(status, 200, reply)
+            self.assertIsNone(panel.read_ms)  # the loop reads none of its own meanwhile
+            self.assertTrue(await until(lambda: world.sim.limp == {1, 2, 3, 4}))
+            self.assertTrue(reply["limp"])
+            await http(port, "POST", "/api/record", {"on": False}, token)
+            self.assertEqual(panel.read_ms, busservo_web._READ_MS)  # and again after
+            reply = await record_sweep(port, world, token, 800)
+            rec = reply["rec"]
+            self.assertFalse(rec["recording"])
+            self.assertTrue(rec["samples"] > 10, rec)  # a read every 30..50 ms
+            self.assertTrue(1.0 <= rec["s"] <= 2.0, rec)
+            recording = recording_part(panel).recording
+            first, last = list(recording)[0][1], list(recording)[-1][1]
+            self.assertTrue(abs(first["base"]) < 2, first)  # 500 +- a read's lag
+            self.assertAlmostEqual(last["base"], robot.joints["base"].degrees(700), 0)
+            self.assertTrue(os.stat(busservo_web_record.FILE)[6] > 0)  # on the board's flash
+            world.sim.turn(1, 300)  # the arm put elsewhere
+            before = len(moves(world))
+            status, reply = await http(port, "POST", "/api/replay", {"speed": 2}, token)
+            self.assertEqual(status, 200, reply)
+            self.assertEqual((reply["rec"]["playing"], reply["rec"]["speed"]), (True, 2))
+            # It holds the joints: the sliders are refused while it plays.
+            status, reply = await http(
+                port, "POST", "/api/target", {"targets": {"base": 5}}, token
+            )
+            self.assertEqual(status, 409)
+            self.assertIn("the recording is playing", reply["error"])
+            for _ in range(40):  # the page, open (else the dead-man ends it)
+                if not (await state(port, token))["rec"]["playing"]:
+                    break
+                await asyncio.sleep_ms(200)
+            self.assertEqual((panel.error, panel.armed), (None, token))
+            self.assertTrue(len(moves(world)) > before + 3)  # its samples, not one pose
+            self.assertTrue(await until(lambda: abs(world.sim.position(1) - 700) <= 2, 1000))
+            self.assertIsNone(panel.busy)
+
+        recorded(scenario)
+
+    def test_what_it_refuses(self):
+        async def scenario(port, world, robot):
+            token = await login(port)
+            post = lambda path, body: http(port, "POST", path, body, token)  # noqa: E731
+            for path, body, status, why in (
+                ("/api/record", {"on": True}, 409, "arm the panel first"),
+                ("/api/record", {}, 400, "on must be a bool"),
+                ("/api/replay", {"speed": 1}, 409, "arm the panel first"),
+                ("/api/teleop", {"on": True}, 409, "no leader arm"),
+            ):
+                got, reply = await post(path, body)
+                self.assertEqual((got, path), (status, path), reply)
+                self.assertIn(why, reply["error"])
+            self.assertEqual(world.sim.limp, set())  # nothing went limp, nothing moved
+            self.assertEqual(moves(world), [])
+            await http(port, "POST", "/api/arm", {"on": True}, token)
+            for path, body, status, why in (
+                ("/api/replay", {}, 409, "nothing recorded yet"),
+                ("/api/replay", {"speed": 3}, 400, "speed must be in 0.25..2, got 3"),
+                ("/api/replay", {"speed": 0.2}, 400, "speed must be in 0.25..2, got 0.2"),
+            ):
+                got, reply = await post(path, body)
+                self.assertEqual((got, path), (status, path), reply)
+                self.assertIn(why, reply["error"])
+            # Recording is refused while a sequence plays, and a sequence while it records.
+            await post("/api/add", {"pose": {"base": 10}, "ms": 3000})
+            status, reply = await post("/api/play", {})
+            self.assertEqual(status, 200, reply)
+            status, reply = await post("/api/record", {"on": True})
+            self.assertEqual(status, 409)
+            self.assertIn("a sequence is playing", reply["error"])
+            self.assertEqual(world.sim.limp, set())
+            await post("/api/stop", {})
+            status, reply = await post("/api/record", {"on": True})
+            self.assertEqual(status, 200, reply)
+            for path, body, why in (
+                ("/api/play", {}, "recording: stop it first"),
+                ("/api/target", {"targets": {"base": 5}}, "recording: stop it first"),
+                ("/api/replay", {}, "recording: stop it first"),
+            ):
+                got, reply = await post(path, body)
+                self.assertEqual((got, path), (409, path), reply)
+                self.assertIn(why, reply["error"])
+            self.assertTrue(reply["rec"]["recording"] if "rec" in reply else True)
+            self.assertTrue((await state(port, token))["rec"]["recording"])
+
+        recorded(scenario)
+
+    def test_stop_ends_recording_and_replay(self):
+        async def scenario(port, world, robot):
+            token = await armed(port)
+            panel = _panels[-1]
+            status, reply = await http(port, "POST", "/api/record", {"on": True}, token)
+            await polled(port, token, 400)
+            other = await login(port)  # another page's STOP ends it too, and it is kept
+            status, reply = await http(port, "POST", "/api/estop", {}, other)
+            self.assertFalse(reply["rec"]["recording"], reply)
+            self.assertTrue(reply["rec"]["samples"] > 3, reply)
+            self.assertEqual(panel.read_ms, busservo_web._READ_MS)
+            self.assertIsNone(panel.busy)
+            token = await armed(port)
+            status, reply = await http(port, "POST", "/api/replay", {"speed": 0.25}, token)
+            self.assertEqual(status, 200, reply)
+            self.assertTrue(await until(lambda: world.sim.limp == set()))
+            status, reply = await http(port, "POST", "/api/estop", {}, token)
+            self.assertFalse(reply["rec"]["playing"], reply)
+            self.assertTrue(await until(lambda: world.sim.limp == {1, 2, 3, 4}))
+            moved = len(moves(world))
+            await polled(port, token, 400)
+            self.assertEqual(len(moves(world)), moved)  # nothing more sent
+            # Its own stop ends a replay too, and the dead-man does.
+            token = await armed(port)
+            await http(port, "POST", "/api/replay", {"speed": 0.25}, token)
+            status, reply = await http(port, "POST", "/api/record", {"on": False}, token)
+            self.assertFalse(reply["rec"]["playing"], reply)
+            self.assertIsNone(panel.busy)
+
+        recorded(scenario)
+
+    def test_a_leader_drives_the_robot_from_the_page_until_it_is_turned_off_or_stopped(self):
+        async def scenario(port, world, robot):
+            panel = _panels[-1]
+            self.assertIsNotNone(recording_part(panel))  # a leader: plugged in at once
+            token = await login(port)
+            teleop = (await state(port, token))["teleop"]
+            self.assertEqual((teleop["on"], teleop["hz"]), (False, 0))
+            status, reply = await http(port, "POST", "/api/teleop", {"on": True}, token)
+            self.assertEqual(status, 409)  # unarmed
+            token = await armed(port)
+            status, reply = await http(port, "POST", "/api/teleop", {"on": True}, token)
+            self.assertEqual((status, reply["teleop"]["on"]), (200, True), reply)
+            self.assertTrue(await until(lambda: {11, 12, 13, 14} <= world.sim.limp))
+            world.sim.turn(11, 600)  # the leader's base, by hand
+            self.assertTrue(await until(lambda: abs(world.sim.position(1) - 600) <= 2, 6000))
+            reply = await state(port, token)
+            self.assertTrue(reply["teleop"]["hz"] > 5, reply)  # its live rate
+            self.assertTrue(reply["teleop"]["engaged"], reply)
+            status, reply = await http(port, "POST", "/api/record", {"on": True}, token)
+            self.assertEqual(status, 409)
+            self.assertIn("teleop is on", reply["error"])
+            status, reply = await http(port, "POST", "/api/teleop", {"on": False}, token)
+            self.assertEqual((status, reply["teleop"]["on"]), (200, False))
+            self.assertIsNone(panel.busy)
+            moved = len(moves(world))
+            await asyncio.sleep_ms(200)  # a move on its way when it was turned off
+            moved = len(moves(world))
+            world.sim.turn(11, 400)
+            await polled(port, token, 400)
+            self.assertEqual(len(moves(world)), moved)  # off: the robot no longer follows
+            await http(port, "POST", "/api/teleop", {"on": True}, token)
+            status, reply = await http(port, "POST", "/api/estop", {}, token)
+            self.assertEqual(reply["teleop"]["on"], False)  # STOP ends it
+            self.assertTrue(await until(lambda: {1, 2, 3, 4} <= world.sim.limp))
+
+        recorded(scenario, leader=True)

@@ -9,7 +9,9 @@
 # position and which are limp, as JSON (GET anything). It prints "serving" once
 # both listen. GET /turn/ID/POSITION (more pairs may follow) on it turns those servos by
 # hand first, if they are limp. --calibration PATH: the robot of that file, and the
-# panel's calibration file (an arm's links, and where its calibration page saves).
+# panel's calibration file (an arm's links, and where its calibration page saves). --leader:
+# the program gives the panel a leader arm (the same joints on servos 11..14, on the same
+# bus), which the page turns on and off (its teleop).
 import asyncio
 import json
 import sys
@@ -131,15 +133,24 @@ async def probe(world, port):
     return await asyncio.start_server(answer, "127.0.0.1", port)
 
 
-async def main(port, password, probe_port, path):
+def leader(bus):
+    """A leader arm on bus: the joints of robot(), on servos 11..14."""
+    joints = busservo_board.joints()
+    return bm.Robot(
+        bus, {n: bm.Joint(j.servo_id + 10, limits=j.limits) for n, j in joints.items()}
+    )
+
+
+async def main(port, password, probe_port, path, lead=False):
     world = live()
     arm = robot(world)
     if path:  # a calibration file: its joints (and links: an arm to jog)
         arm = bm.Robot.load(arm.bus, path)
     if probe_port:
         await probe(world, probe_port)
+    options = {"leader": leader(arm.bus)} if lead else {}
     server = asyncio.create_task(
-        busservo_web.serve(arm, password, port, path=path or "robot.json")
+        busservo_web.serve(arm, password, port, path=path or "robot.json", **options)
     )
     await asyncio.sleep_ms(100)
     print("serving", port, flush=True) if hasattr(print, "flush") else print("serving", port)
@@ -158,5 +169,6 @@ if __name__ == "__main__":
             option("--password", "secret-pw"),
             int(option("--probe", 0)),
             option("--calibration", None),
+            "--leader" in args,
         )
     )
