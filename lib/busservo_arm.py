@@ -46,6 +46,8 @@ _DPS = 0.9  # a line plans a joint's speed at most this share of its dps
 _LATE_MS = 100  # a line's time moves on at most this much an update: a late loop slows it
 
 _number = busservo_motion.number  # a finite number in a range, or raise naming it
+_INF = float("inf")
+_NINF = float("-inf")
 _type = type
 _int = int
 _float = float
@@ -93,15 +95,21 @@ class Arm:
         self.robot = robot
         self.elbow_up = bool(elbow_up)
         self._b = float(links["base_height"])
-        self._u = float(links["upper_arm"])
-        self._f = float(links["forearm"])
+        self._u = u = float(links["upper_arm"])
+        self._f = f = float(links["forearm"])
         self._h = float(links["hand"])
+        # Worked out once, for the solve: the law of cosines' terms.
+        self._uf2 = u * u + f * f
+        self._2uf = 2 * u * f
         self._joints = [robot.joints[name] for name in JOINTS]
         self._at = None  # [base, shoulder, elbow, wrist]: degrees last sent or read
         self._pose = {name: 0.0 for name in JOINTS}  # what a line streams, made once
         # A solve's result: the plane's angles, or why not (a joint's index, or -1 for the
         # reach, the value, how far beyond, and the limits it is beyond).
-        self._s = self._e = self._w = 0.0
+        self._a = self._s = self._e = self._w = 0.0
+        self._hand_pitch = None  # the pitch the hand's reach in the plane is worked out for
+        self._hand_r = self._hand_z = 0.0
+        self._target = {name: 0.0 for name in JOINTS}  # what move_to() moves to, made once
         self._why = None
         self._worst = None  # the least bad failure of a scan of pitches, and its pitch
         self._why_pitch = 0
@@ -154,12 +162,35 @@ class Arm:
         """{name: degrees} of the four joints that put the tool point at x, y, z mm with the
         hand at pitch degrees (None: the reachable pitch nearest -90): the inverse
         kinematics. Raises ValueError naming the point, the reach and the limiting joint."""
-        _number("x", x)
-        _number("y", y)
-        _number("z", z)
-        if pitch is not None:
+        self._solve(x, y, z, pitch)
+        return {"base": self._a, "shoulder": self._s, "elbow": self._e, "wrist": self._w}
+
+    def _solve(self, x, y, z, pitch):
+        # pose()'s work: the angles in self._a (the base), _s, _e and _w. The checks are
+        # inline (a call costs more than the check): _number() only to say what is wrong.
+        t = _type(x)
+        if t is not _int and (t is not _float or not _NINF < x < _INF):
+            _number("x", x)
+        t = _type(y)
+        if t is not _int and (t is not _float or not _NINF < y < _INF):
+            _number("y", y)
+        t = _type(z)
+        if t is not _int and (t is not _float or not _NINF < z < _INF):
+            _number("z", z)
+        t = _type(pitch)
+        if pitch is not None and t is not _int and (t is not _float or not _NINF < pitch < _INF):
             _number("pitch", pitch)
-        base = self._base(x, y, z)
+        # The base's angle towards x, y (checked), or where it is if x, y is on its axis.
+        if x or y:
+            base = math.atan2(y, x) * _DEG
+        else:
+            base = self._at[0] if self._at else 0.0
+        joint = self._joints[0]
+        if base < joint.lo or base > joint.hi:
+            raise ValueError(
+                "(x, y, z) = (%.1f, %.1f, %.1f) mm: the base would be at %.1f degrees, beyond its"
+                " limits %.1f..%.1f" % (x, y, z, base, joint.lo, joint.hi)
+            )
         r = math.sqrt(x * x + y * y)
         zz = z - self._b
         if pitch is None:
@@ -168,7 +199,7 @@ class Arm:
                 raise ValueError(self._refusal(x, y, z, None))
         elif not self._plane(r, zz, pitch, True):
             raise ValueError(self._refusal(x, y, z, pitch))
-        return {"base": base, "shoulder": self._s, "elbow": self._e, "wrist": self._w}
+        self._a = base
 
     def reach(self, x, y, z, pitch):
         """The tool point nearest x, y, z mm (with the hand at pitch degrees) that the wrist
@@ -187,34 +218,26 @@ class Arm:
         r = wr * k + hr
         return r * math.cos(base), r * math.sin(base), wz * k + hz + self._b
 
-    def _base(self, x, y, z):
-        # The base's angle towards x, y (checked), or where it is if x, y is on its axis.
-        if x or y:
-            base = math.atan2(y, x) * _DEG
-        else:
-            base = self._at[0] if self._at else 0.0
-        joint = self._joints[0]
-        if not joint.lo <= base <= joint.hi:
-            raise ValueError(
-                "(x, y, z) = (%.1f, %.1f, %.1f) mm: the base would be at %.1f degrees, beyond its"
-                " limits %.1f..%.1f" % (x, y, z, base, joint.lo, joint.hi)
-            )
-        return base
-
     def _plane(self, r, zz, pitch, strict):
         # Solve in the arm's plane for the tool point r mm out from the base's axis, zz mm
         # above the shoulder's, at pitch: self._s, _e, _w, and True; or False, and why in
         # self._why. Not strict (a line's step): past the reach or a limit, the nearest
         # (the robot clamps to the limits, and counts).
-        p = pitch * _RAD
-        wr = r - self._h * math.cos(p)
-        wz = zz - self._h * math.sin(p)
-        u = self._u
+        # Floats are heap objects: each float operation here allocates, so the terms that do
+        # not change are worked out once (Arm()), and no tuple is built unless it fails.
+        if pitch != self._hand_pitch:  # the hand, in the plane: the same for the same pitch
+            p = pitch * _RAD
+            self._hand_r = self._h * math.cos(p)
+            self._hand_z = self._h * math.sin(p)
+            self._hand_pitch = pitch
+        wr = r - self._hand_r
+        wz = zz - self._hand_z
         f = self._f
         d2 = wr * wr + wz * wz
-        c = (d2 - u * u - f * f) / (2 * u * f)
+        c = (d2 - self._uf2) / self._2uf
         if c > 1 or c < -1:
             if strict:
+                u = self._u
                 d = math.sqrt(d2)
                 if c > 1:
                     self._why = (-1, d, d - u - f, u + f)
@@ -222,22 +245,42 @@ class Arm:
                     self._why = (-1, d, abs(u - f) - d, abs(u - f))
                 return False
             c = 1.0 if c > 1 else -1.0
+        # The elbow's angle e has cos(e) = c, and sin(e) = sqrt(1 - c * c) elbow up.
         e = math.acos(c)
+        sin_e = math.sqrt(1 - c * c)
         if not self.elbow_up:
             e = -e
-        s = math.atan2(wr, wz) - math.atan2(f * math.sin(e), u + f * math.cos(e))
-        self._s = s = _wrap(s * _DEG)
+            sin_e = -sin_e
+        s = (math.atan2(wr, wz) - math.atan2(f * sin_e, self._u + f * c)) * _DEG
+        if s > 180:  # the difference of two angles in -180..180: one turn at most
+            s -= 360
+        elif s <= -180:
+            s += 360
+        self._s = s
         self._e = e = e * _DEG
-        self._w = w = _wrap(90 - pitch - s - e)
+        w = 90 - pitch - s - e
+        if w > 180 or w <= -180:
+            w = _wrap(w)
+        self._w = w
         if strict:
             joints = self._joints
-            for i, value in ((1, s), (2, e), (3, w)):
-                joint = joints[i]
-                if not joint.lo <= value <= joint.hi:
-                    beyond = joint.lo - value if value < joint.lo else value - joint.hi
-                    self._why = (i, value, beyond, joint)
-                    return False
+            joint = joints[1]
+            if s < joint.lo or s > joint.hi:
+                return self._beyond(1, s)
+            joint = joints[2]
+            if e < joint.lo or e > joint.hi:
+                return self._beyond(2, e)
+            joint = joints[3]
+            if w < joint.lo or w > joint.hi:
+                return self._beyond(3, w)
         return True
+
+    def _beyond(self, i, value):
+        # False, and why in self._why: joint i would be at value, beyond its limits.
+        joint = self._joints[i]
+        beyond = joint.lo - value if value < joint.lo else value - joint.hi
+        self._why = (i, value, beyond, joint)
+        return False
 
     def _pitch(self, r, zz):
         # The pitch nearest -90 at which the plane's solve succeeds (self._s, _e, _w are its
@@ -363,7 +406,12 @@ class Arm:
             _number("mm_s", mm_s, 0)
             if not mm_s:
                 raise ValueError("mm_s must be more than 0 mm/s, got %r" % (mm_s,))
-        pose = self.pose(x, y, z, pitch)
+        self._solve(x, y, z, pitch)
+        pose = self._target
+        pose["base"] = self._a
+        pose["shoulder"] = self._s
+        pose["elbow"] = self._e
+        pose["wrist"] = self._w
         if mm_s is not None:
             ms = math.ceil(self._distance(pose) * 1000 / mm_s - 1e-6)  # (float error)
             if ms > _MS_MAX:
@@ -375,7 +423,13 @@ class Arm:
         if robot.player:
             robot.player.stop()
         took = robot.move(pose, ms=ms)
-        self._at = [pose[name] for name in JOINTS]
+        at = self._at
+        if at is None:
+            self._at = at = [0.0] * 4
+        at[0] = pose["base"]
+        at[1] = pose["shoulder"]
+        at[2] = pose["elbow"]
+        at[3] = pose["wrist"]
         return took
 
     def _known(self):
