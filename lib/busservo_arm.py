@@ -46,6 +46,12 @@ _DPS = 0.9  # a line plans a joint's speed at most this share of its dps
 _LATE_MS = 100  # a line's time moves on at most this much an update: a late loop slows it
 
 _number = busservo_motion.number  # a finite number in a range, or raise naming it
+# One lookup rather than two (math, then its function): the solve calls them often.
+_atan2 = math.atan2
+_sqrt = math.sqrt
+_acos = math.acos
+_cos = math.cos
+_sin = math.sin
 _INF = float("inf")
 _NINF = float("-inf")
 _type = type
@@ -153,10 +159,10 @@ class Arm:
         a = shoulder * _RAD
         b = a + elbow * _RAD
         c = b + wrist * _RAD
-        r = self._u * math.sin(a) + self._f * math.sin(b) + self._h * math.sin(c)
-        z = self._b + self._u * math.cos(a) + self._f * math.cos(b) + self._h * math.cos(c)
+        r = self._u * _sin(a) + self._f * _sin(b) + self._h * _sin(c)
+        z = self._b + self._u * _cos(a) + self._f * _cos(b) + self._h * _cos(c)
         base *= _RAD
-        return r * math.cos(base), r * math.sin(base), z, _wrap(90 - c * _DEG)
+        return r * _cos(base), r * _sin(base), z, _wrap(90 - c * _DEG)
 
     def pose(self, x, y, z, pitch=None):
         """{name: degrees} of the four joints that put the tool point at x, y, z mm with the
@@ -182,7 +188,7 @@ class Arm:
             _number("pitch", pitch)
         # The base's angle towards x, y (checked), or where it is if x, y is on its axis.
         if x or y:
-            base = math.atan2(y, x) * _DEG
+            base = _atan2(y, x) * _DEG
         else:
             base = self._at[0] if self._at else 0.0
         joint = self._joints[0]
@@ -191,7 +197,7 @@ class Arm:
                 "(x, y, z) = (%.1f, %.1f, %.1f) mm: the base would be at %.1f degrees, beyond its"
                 " limits %.1f..%.1f" % (x, y, z, base, joint.lo, joint.hi)
             )
-        r = math.sqrt(x * x + y * y)
+        r = _sqrt(x * x + y * y)
         zz = z - self._b
         if pitch is None:
             pitch = self._pitch(r, zz)
@@ -205,18 +211,18 @@ class Arm:
         """The tool point nearest x, y, z mm (with the hand at pitch degrees) that the wrist
         can reach: x, y, z itself if it can, else the one whose wrist is at the reach's edge
         (a hair inside), on the line from the shoulder's axis. (x, y, z)."""
-        base = math.atan2(y, x) if x or y else (self._at[0] if self._at else 0.0) * _RAD
+        base = _atan2(y, x) if x or y else (self._at[0] if self._at else 0.0) * _RAD
         p = pitch * _RAD
-        hr = self._h * math.cos(p)  # the hand, in the arm's plane
-        hz = self._h * math.sin(p)
-        wr = math.sqrt(x * x + y * y) - hr  # the wrist, from the shoulder's axis
+        hr = self._h * _cos(p)  # the hand, in the arm's plane
+        hz = self._h * _sin(p)
+        wr = _sqrt(x * x + y * y) - hr  # the wrist, from the shoulder's axis
         wz = z - self._b - hz
-        d = math.sqrt(wr * wr + wz * wz)
+        d = _sqrt(wr * wr + wz * wz)
         far = self._u + self._f - _EDGE_MM
         near = abs(self._u - self._f) + _EDGE_MM
         k = far / d if d > far else near / d if 0 < d < near else 1.0
         r = wr * k + hr
-        return r * math.cos(base), r * math.sin(base), wz * k + hz + self._b
+        return r * _cos(base), r * _sin(base), wz * k + hz + self._b
 
     def _plane(self, r, zz, pitch, strict):
         # Solve in the arm's plane for the tool point r mm out from the base's axis, zz mm
@@ -227,8 +233,8 @@ class Arm:
         # not change are worked out once (Arm()), and no tuple is built unless it fails.
         if pitch != self._hand_pitch:  # the hand, in the plane: the same for the same pitch
             p = pitch * _RAD
-            self._hand_r = self._h * math.cos(p)
-            self._hand_z = self._h * math.sin(p)
+            self._hand_r = self._h * _cos(p)
+            self._hand_z = self._h * _sin(p)
             self._hand_pitch = pitch
         wr = r - self._hand_r
         wz = zz - self._hand_z
@@ -238,7 +244,7 @@ class Arm:
         if c > 1 or c < -1:
             if strict:
                 u = self._u
-                d = math.sqrt(d2)
+                d = _sqrt(d2)
                 if c > 1:
                     self._why = (-1, d, d - u - f, u + f)
                 else:
@@ -246,12 +252,12 @@ class Arm:
                 return False
             c = 1.0 if c > 1 else -1.0
         # The elbow's angle e has cos(e) = c, and sin(e) = sqrt(1 - c * c) elbow up.
-        e = math.acos(c)
-        sin_e = math.sqrt(1 - c * c)
+        e = _acos(c)
+        sin_e = _sqrt(1 - c * c)
         if not self.elbow_up:
             e = -e
             sin_e = -sin_e
-        s = (math.atan2(wr, wz) - math.atan2(f * sin_e, self._u + f * c)) * _DEG
+        s = (_atan2(wr, wz) - _atan2(f * sin_e, self._u + f * c)) * _DEG
         if s > 180:  # the difference of two angles in -180..180: one turn at most
             s -= 360
         elif s <= -180:
@@ -293,12 +299,12 @@ class Arm:
         # shoulder's axis depends on the pitch's angle from phi, the tool point's direction
         # from that axis. It is in reach where that angle is lo..hi degrees either way.
         h = self._h
-        d = math.sqrt(r * r + zz * zz)
+        d = _sqrt(r * r + zz * zz)
         phi = -90.0
         lo = 0.0
         hi = 180.0
         if h * d > 1e-9:
-            phi = math.atan2(zz, r) * _DEG
+            phi = _atan2(zz, r) * _DEG
             far = self._u + self._f
             near = abs(self._u - self._f)
             cos_hi = (d * d + h * h - far * far) / (2 * h * d)
@@ -308,9 +314,9 @@ class Arm:
                 self._why, self._why_pitch = self._worst
                 return None
             if cos_hi > -1:
-                hi = math.acos(cos_hi) * _DEG
+                hi = _acos(cos_hi) * _DEG
             if cos_lo < 1:
-                lo = math.acos(cos_lo) * _DEG
+                lo = _acos(cos_lo) * _DEG
             # -90 failed: if it is out of reach, the edge of the reach nearest it (a hair
             # inside) is the answer, unless a joint's limit is in the way there too.
             off = _wrap(-90 - phi)
@@ -446,16 +452,16 @@ class Arm:
         x0, y0, z0, p0 = self._point(at[0], at[1], at[2], at[3])
         x1, y1, z1, p1 = self._point(pose["base"], pose["shoulder"], pose["elbow"], pose["wrist"])
         h = self._h
-        tool = math.sqrt((x1 - x0) ** 2 + (y1 - y0) ** 2 + (z1 - z0) ** 2)
+        tool = _sqrt((x1 - x0) ** 2 + (y1 - y0) ** 2 + (z1 - z0) ** 2)
         # The wrist is the hand's length back from the tool point, along the hand.
         b0 = at[0] * _RAD
         b1 = pose["base"] * _RAD
-        q0 = math.cos(p0 * _RAD)
-        q1 = math.cos(p1 * _RAD)
-        dx = (x1 - h * q1 * math.cos(b1)) - (x0 - h * q0 * math.cos(b0))
-        dy = (y1 - h * q1 * math.sin(b1)) - (y0 - h * q0 * math.sin(b0))
-        dz = (z1 - h * math.sin(p1 * _RAD)) - (z0 - h * math.sin(p0 * _RAD))
-        return max(tool, math.sqrt(dx * dx + dy * dy + dz * dz), abs(_wrap(p1 - p0)))
+        q0 = _cos(p0 * _RAD)
+        q1 = _cos(p1 * _RAD)
+        dx = (x1 - h * q1 * _cos(b1)) - (x0 - h * q0 * _cos(b0))
+        dy = (y1 - h * q1 * _sin(b1)) - (y0 - h * q0 * _sin(b0))
+        dz = (z1 - h * _sin(p1 * _RAD)) - (z0 - h * _sin(p0 * _RAD))
+        return max(tool, _sqrt(dx * dx + dy * dy + dz * dz), abs(_wrap(p1 - p0)))
 
     def where(self, positions=None):
         """(x, y, z, pitch) of the tool point, from the joints' positions read now (a
@@ -494,7 +500,7 @@ class Line:
         # Check the line every _CHECK_MM (mm, and degrees of pitch), and time it: mm_s for
         # the tool point and the wrist, and no joint faster than _DPS of its dps.
         dx, dy, dz, dp = x - x0, y - y0, z - z0, _wrap(p1 - p0)  # the short way round
-        length = math.sqrt(dx * dx + dy * dy + dz * dz)
+        length = _sqrt(dx * dx + dy * dy + dz * dz)
         n = math.ceil(max(length, abs(dp), 1) / _CHECK_MM)
         n = min(n, _CHECKS_MAX)
         self.ms = arm._distance(end) * 1000 / mm_s
@@ -520,6 +526,7 @@ class Line:
         self.updates = 0  # frames of this line sent
         self.done = False
         self._dx, self._dy, self._dz, self._dp = dx, dy, dz, dp
+        self._from = (x0, y0, z0 - arm._b, p0)  # z from the shoulder's axis, for the solve
         self._t = -1  # the line's time at the last target streamed, in ms (-1: none yet)
         self._sent = 0  # ticks_ms then
         self._stepped = time.ticks_ms()
@@ -552,13 +559,17 @@ class Line:
             t += dt if dt < _LATE_MS else _LATE_MS
         u = t / self.ms if self.ms and t < self.ms else 1.0
         arm = self.arm
-        x0, y0, z0, p0 = self.start
+        x0, y0, zz, pitch = self._from  # (floats are heap objects: no sum where 0 is added)
         x = x0 + self._dx * u
         y = y0 + self._dy * u
+        if self._dz:
+            zz += self._dz * u
+        if self._dp:
+            pitch += self._dp * u
         pose = arm._pose
         if x or y:
-            pose["base"] = math.atan2(y, x) * _DEG
-        arm._plane(math.sqrt(x * x + y * y), z0 + self._dz * u - arm._b, p0 + self._dp * u, False)
+            pose["base"] = _atan2(y, x) * _DEG
+        arm._plane(_sqrt(x * x + y * y), zz, pitch, False)
         pose["shoulder"] = arm._s
         pose["elbow"] = arm._e
         pose["wrist"] = arm._w
@@ -569,8 +580,10 @@ class Line:
         self._sent = now
         self.updates += 1
         at = arm._at
-        for i in range(4):
-            at[i] = pose[JOINTS[i]]
+        at[0] = pose["base"]
+        at[1] = arm._s
+        at[2] = arm._e
+        at[3] = arm._w
         if u >= 1:
             self._end()
         return True

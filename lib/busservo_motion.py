@@ -171,13 +171,14 @@ class Joint:
             # top 22 bits of its significand m (1 <= m / 2**21 < 2), degrees =
             # m * 2**(e - 148). |degrees| < 512, so the shift is to the right, and
             # m * num < 2**30 stays a small int on a 32-bit port.
-            pack_into("<f", _bits, 0, degrees)
             b = _bits
-            shift = 148 - _Q - ((b[3] & 0x7F) << 1 | b[2] >> 7)
-            m = ((b[2] | 0x80) << 16 | b[1] << 8 | b[0]) >> 2
-            q = 0 if shift > 40 else ((m * self._num) >> shift) // self._den
-            if b[3] & 0x80:
-                q = -q
+            pack_into("<f", b, 0, degrees)
+            q = b[3]  # the sign, and the exponent's top 7 bits (each byte read once)
+            m = b[2]
+            shift = 148 - _Q - ((q & 0x7F) << 1 | m >> 7)
+            m = ((m | 0x80) << 16 | b[1] << 8 | b[0]) >> 2
+            m = 0 if shift > 40 else ((m * self._num) >> shift) // self._den
+            q = -m if q & 0x80 else m
         return (self._c + q + (1 << (_Q - 1))) >> _Q
 
     def degrees(self, position):
@@ -477,11 +478,13 @@ class Robot:
                     % name
                 )
             tmp[i] = joint.position(degrees)
+        goal = self._goal
+        streamed = self._in
         for name in targets:
             i = index[name]
-            self._goal[i] = tmp[i]
-            if not self._in[i]:
-                self._in[i] = 1
+            goal[i] = tmp[i]
+            if not streamed[i]:
+                streamed[i] = 1
                 self._live.append(self._pairs[i])
                 self._live_i.append(i)
         now = time.ticks_ms()
@@ -534,8 +537,9 @@ class Robot:
             elapsed = cap
         glide = ms
         fresh = False
+        live_i = self._live_i
         for k in range(len(live)):
-            i = self._live_i[k]
+            i = live_i[k]
             position = goal[i]
             pps = joints[i]._pps
             if pps:  # no faster than the joint's dps: step towards the goal
@@ -559,7 +563,7 @@ class Robot:
         self._ms = glide
         self._slowing = fresh or glide > ms  # still on its way: the next frame waits
         for k in range(len(live)):
-            at[self._live_i[k]] = live[k][1]
+            at[live_i[k]] = live[k][1]
         if fresh:
             self.slowed += 1
         self._fresh = fresh
