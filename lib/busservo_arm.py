@@ -46,6 +46,7 @@ _DPS = 0.9  # a line plans a joint's speed at most this share of its dps
 _LATE_MS = 100  # a line's time moves on at most this much an update: a late loop slows it
 
 _number = busservo_motion.number  # a finite number in a range, or raise naming it
+_SOLVE = object()  # move_to(..., ms=_SOLVE): pose()'s solve alone, nothing sent
 # One lookup rather than two (math, then its function): the solve calls them often.
 _atan2 = math.atan2
 _sqrt = math.sqrt
@@ -168,44 +169,8 @@ class Arm:
         """{name: degrees} of the four joints that put the tool point at x, y, z mm with the
         hand at pitch degrees (None: the reachable pitch nearest -90): the inverse
         kinematics. Raises ValueError naming the point, the reach and the limiting joint."""
-        self._solve(x, y, z, pitch)
+        self.move_to(x, y, z, pitch, _SOLVE)
         return {"base": self._a, "shoulder": self._s, "elbow": self._e, "wrist": self._w}
-
-    def _solve(self, x, y, z, pitch):
-        # pose()'s work: the angles in self._a (the base), _s, _e and _w. The checks are
-        # inline (a call costs more than the check): _number() only to say what is wrong.
-        t = _type(x)
-        if t is not _int and (t is not _float or not _NINF < x < _INF):
-            _number("x", x)
-        t = _type(y)
-        if t is not _int and (t is not _float or not _NINF < y < _INF):
-            _number("y", y)
-        t = _type(z)
-        if t is not _int and (t is not _float or not _NINF < z < _INF):
-            _number("z", z)
-        t = _type(pitch)
-        if pitch is not None and t is not _int and (t is not _float or not _NINF < pitch < _INF):
-            _number("pitch", pitch)
-        # The base's angle towards x, y (checked), or where it is if x, y is on its axis.
-        if x or y:
-            base = _atan2(y, x) * _DEG
-        else:
-            base = self._at[0] if self._at else 0.0
-        joint = self._joints[0]
-        if base < joint.lo or base > joint.hi:
-            raise ValueError(
-                "(x, y, z) = (%.1f, %.1f, %.1f) mm: the base would be at %.1f degrees, beyond its"
-                " limits %.1f..%.1f" % (x, y, z, base, joint.lo, joint.hi)
-            )
-        r = _sqrt(x * x + y * y)
-        zz = z - self._b
-        if pitch is None:
-            pitch = self._pitch(r, zz)
-            if pitch is None:
-                raise ValueError(self._refusal(x, y, z, None))
-        elif not self._plane(r, zz, pitch, True):
-            raise ValueError(self._refusal(x, y, z, pitch))
-        self._a = base
 
     def reach(self, x, y, z, pitch):
         """The tool point nearest x, y, z mm (with the hand at pitch degrees) that the wrist
@@ -399,20 +364,59 @@ class Arm:
         pitch nearest -90), in one frame for the four joints: within ms, or at mm_s for the
         tool point and the wrist (from where the arm last went, read first if not known).
         Return the move's ms."""
-        if (ms is None) == (mm_s is None):
-            raise ValueError(
-                "give move_to() ms or mm_s (not both), got ms=%r mm_s=%r" % (ms, mm_s)
-            )
-        if ms is not None:
-            if _type(ms) is not _int:
-                raise TypeError("ms must be an int in 0..%d ms, got %r" % (_MS_MAX, ms))
-            if not 0 <= ms <= _MS_MAX:
-                raise ValueError("ms must be in 0..%d ms, got %r" % (_MS_MAX, ms))
+        # pose() is this with ms _SOLVE: the solve alone (the angles in self._a, the base, _s,
+        # _e and _w), nothing sent. One function for both, not a helper each calls: on
+        # MicroPython a call of a function with many locals takes a heap block, and a move
+        # with one fewer takes a fifth less time. The checks are inline (a call costs more
+        # than the check): _number() only to say what is wrong.
+        if ms is not _SOLVE:
+            if (ms is None) == (mm_s is None):
+                raise ValueError(
+                    "give move_to() ms or mm_s (not both), got ms=%r mm_s=%r" % (ms, mm_s)
+                )
+            if ms is not None:
+                if _type(ms) is not _int:
+                    raise TypeError("ms must be an int in 0..%d ms, got %r" % (_MS_MAX, ms))
+                if not 0 <= ms <= _MS_MAX:
+                    raise ValueError("ms must be in 0..%d ms, got %r" % (_MS_MAX, ms))
+            else:
+                _number("mm_s", mm_s, 0)
+                if not mm_s:
+                    raise ValueError("mm_s must be more than 0 mm/s, got %r" % (mm_s,))
+        t = _type(x)
+        if t is not _int and (t is not _float or not _NINF < x < _INF):
+            _number("x", x)
+        t = _type(y)
+        if t is not _int and (t is not _float or not _NINF < y < _INF):
+            _number("y", y)
+        t = _type(z)
+        if t is not _int and (t is not _float or not _NINF < z < _INF):
+            _number("z", z)
+        t = _type(pitch)
+        if pitch is not None and t is not _int and (t is not _float or not _NINF < pitch < _INF):
+            _number("pitch", pitch)
+        # The base's angle towards x, y (checked), or where it is if x, y is on its axis.
+        if x or y:
+            base = _atan2(y, x) * _DEG
         else:
-            _number("mm_s", mm_s, 0)
-            if not mm_s:
-                raise ValueError("mm_s must be more than 0 mm/s, got %r" % (mm_s,))
-        self._solve(x, y, z, pitch)
+            base = self._at[0] if self._at else 0.0
+        joint = self._joints[0]
+        if base < joint.lo or base > joint.hi:
+            raise ValueError(
+                "(x, y, z) = (%.1f, %.1f, %.1f) mm: the base would be at %.1f degrees, beyond its"
+                " limits %.1f..%.1f" % (x, y, z, base, joint.lo, joint.hi)
+            )
+        r = _sqrt(x * x + y * y)
+        zz = z - self._b
+        if pitch is None:
+            pitch = self._pitch(r, zz)
+            if pitch is None:
+                raise ValueError(self._refusal(x, y, z, None))
+        elif not self._plane(r, zz, pitch, True):
+            raise ValueError(self._refusal(x, y, z, pitch))
+        self._a = base
+        if ms is _SOLVE:
+            return None
         pose = self._target
         pose["base"] = self._a
         pose["shoulder"] = self._s
