@@ -563,9 +563,11 @@ class Line:
             t += dt if dt < _LATE_MS else _LATE_MS
         u = t / self.ms if self.ms and t < self.ms else 1.0
         arm = self.arm
-        x0, y0, zz, pitch = self._from  # (floats are heap objects: no sum where 0 is added)
-        x = x0 + self._dx * u
-        y = y0 + self._dy * u
+        x, y, zz, pitch = self._from  # (floats are heap objects: no sum where 0 is added)
+        if self._dx:
+            x += self._dx * u
+        if self._dy:
+            y += self._dy * u
         if self._dz:
             zz += self._dz * u
         if self._dp:
