@@ -46,6 +46,15 @@ _DPS = 0.9  # a line plans a joint's speed at most this share of its dps
 _LATE_MS = 100  # a line's time moves on at most this much an update: a late loop slows it
 
 _number = busservo_motion.number  # a finite number in a range, or raise naming it
+_SOLVE = object()  # move_to(..., ms=_SOLVE): pose()'s solve alone, nothing sent
+# One lookup rather than two (math, then its function): the solve calls them often.
+_atan2 = math.atan2
+_sqrt = math.sqrt
+_acos = math.acos
+_cos = math.cos
+_sin = math.sin
+_INF = float("inf")
+_NINF = float("-inf")
 _type = type
 _int = int
 _float = float
@@ -93,15 +102,21 @@ class Arm:
         self.robot = robot
         self.elbow_up = bool(elbow_up)
         self._b = float(links["base_height"])
-        self._u = float(links["upper_arm"])
-        self._f = float(links["forearm"])
+        self._u = u = float(links["upper_arm"])
+        self._f = f = float(links["forearm"])
         self._h = float(links["hand"])
+        # Worked out once, for the solve: the law of cosines' terms.
+        self._uf2 = u * u + f * f
+        self._2uf = 2 * u * f
         self._joints = [robot.joints[name] for name in JOINTS]
         self._at = None  # [base, shoulder, elbow, wrist]: degrees last sent or read
         self._pose = {name: 0.0 for name in JOINTS}  # what a line streams, made once
         # A solve's result: the plane's angles, or why not (a joint's index, or -1 for the
         # reach, the value, how far beyond, and the limits it is beyond).
-        self._s = self._e = self._w = 0.0
+        self._a = self._s = self._e = self._w = 0.0
+        self._hand_pitch = None  # the pitch the hand's reach in the plane is worked out for
+        self._hand_r = self._hand_z = 0.0
+        self._target = {name: 0.0 for name in JOINTS}  # what move_to() moves to, made once
         self._why = None
         self._worst = None  # the least bad failure of a scan of pitches, and its pitch
         self._why_pitch = 0
@@ -145,99 +160,98 @@ class Arm:
         a = shoulder * _RAD
         b = a + elbow * _RAD
         c = b + wrist * _RAD
-        r = self._u * math.sin(a) + self._f * math.sin(b) + self._h * math.sin(c)
-        z = self._b + self._u * math.cos(a) + self._f * math.cos(b) + self._h * math.cos(c)
+        r = self._u * _sin(a) + self._f * _sin(b) + self._h * _sin(c)
+        z = self._b + self._u * _cos(a) + self._f * _cos(b) + self._h * _cos(c)
         base *= _RAD
-        return r * math.cos(base), r * math.sin(base), z, _wrap(90 - c * _DEG)
+        return r * _cos(base), r * _sin(base), z, _wrap(90 - c * _DEG)
 
     def pose(self, x, y, z, pitch=None):
         """{name: degrees} of the four joints that put the tool point at x, y, z mm with the
         hand at pitch degrees (None: the reachable pitch nearest -90): the inverse
         kinematics. Raises ValueError naming the point, the reach and the limiting joint."""
-        _number("x", x)
-        _number("y", y)
-        _number("z", z)
-        if pitch is not None:
-            _number("pitch", pitch)
-        base = self._base(x, y, z)
-        r = math.sqrt(x * x + y * y)
-        zz = z - self._b
-        if pitch is None:
-            pitch = self._pitch(r, zz)
-            if pitch is None:
-                raise ValueError(self._refusal(x, y, z, None))
-        elif not self._plane(r, zz, pitch, True):
-            raise ValueError(self._refusal(x, y, z, pitch))
-        return {"base": base, "shoulder": self._s, "elbow": self._e, "wrist": self._w}
+        self.move_to(x, y, z, pitch, _SOLVE)
+        return {"base": self._a, "shoulder": self._s, "elbow": self._e, "wrist": self._w}
 
     def reach(self, x, y, z, pitch):
         """The tool point nearest x, y, z mm (with the hand at pitch degrees) that the wrist
         can reach: x, y, z itself if it can, else the one whose wrist is at the reach's edge
         (a hair inside), on the line from the shoulder's axis. (x, y, z)."""
-        base = math.atan2(y, x) if x or y else (self._at[0] if self._at else 0.0) * _RAD
+        base = _atan2(y, x) if x or y else (self._at[0] if self._at else 0.0) * _RAD
         p = pitch * _RAD
-        hr = self._h * math.cos(p)  # the hand, in the arm's plane
-        hz = self._h * math.sin(p)
-        wr = math.sqrt(x * x + y * y) - hr  # the wrist, from the shoulder's axis
+        hr = self._h * _cos(p)  # the hand, in the arm's plane
+        hz = self._h * _sin(p)
+        wr = _sqrt(x * x + y * y) - hr  # the wrist, from the shoulder's axis
         wz = z - self._b - hz
-        d = math.sqrt(wr * wr + wz * wz)
+        d = _sqrt(wr * wr + wz * wz)
         far = self._u + self._f - _EDGE_MM
         near = abs(self._u - self._f) + _EDGE_MM
         k = far / d if d > far else near / d if 0 < d < near else 1.0
         r = wr * k + hr
-        return r * math.cos(base), r * math.sin(base), wz * k + hz + self._b
-
-    def _base(self, x, y, z):
-        # The base's angle towards x, y (checked), or where it is if x, y is on its axis.
-        if x or y:
-            base = math.atan2(y, x) * _DEG
-        else:
-            base = self._at[0] if self._at else 0.0
-        joint = self._joints[0]
-        if not joint.lo <= base <= joint.hi:
-            raise ValueError(
-                "(x, y, z) = (%.1f, %.1f, %.1f) mm: the base would be at %.1f degrees, beyond its"
-                " limits %.1f..%.1f" % (x, y, z, base, joint.lo, joint.hi)
-            )
-        return base
+        return r * _cos(base), r * _sin(base), wz * k + hz + self._b
 
     def _plane(self, r, zz, pitch, strict):
         # Solve in the arm's plane for the tool point r mm out from the base's axis, zz mm
         # above the shoulder's, at pitch: self._s, _e, _w, and True; or False, and why in
         # self._why. Not strict (a line's step): past the reach or a limit, the nearest
         # (the robot clamps to the limits, and counts).
-        p = pitch * _RAD
-        wr = r - self._h * math.cos(p)
-        wz = zz - self._h * math.sin(p)
-        u = self._u
+        # Floats are heap objects: each float operation here allocates, so the terms that do
+        # not change are worked out once (Arm()), and no tuple is built unless it fails.
+        if pitch != self._hand_pitch:  # the hand, in the plane: the same for the same pitch
+            p = pitch * _RAD
+            self._hand_r = self._h * _cos(p)
+            self._hand_z = self._h * _sin(p)
+            self._hand_pitch = pitch
+        wr = r - self._hand_r
+        wz = zz - self._hand_z
         f = self._f
         d2 = wr * wr + wz * wz
-        c = (d2 - u * u - f * f) / (2 * u * f)
+        c = (d2 - self._uf2) / self._2uf
         if c > 1 or c < -1:
             if strict:
-                d = math.sqrt(d2)
+                u = self._u
+                d = _sqrt(d2)
                 if c > 1:
                     self._why = (-1, d, d - u - f, u + f)
                 else:
                     self._why = (-1, d, abs(u - f) - d, abs(u - f))
                 return False
             c = 1.0 if c > 1 else -1.0
-        e = math.acos(c)
+        # The elbow's angle e has cos(e) = c, and sin(e) = sqrt(1 - c * c) elbow up.
+        e = _acos(c)
+        sin_e = _sqrt(1 - c * c)
         if not self.elbow_up:
             e = -e
-        s = math.atan2(wr, wz) - math.atan2(f * math.sin(e), u + f * math.cos(e))
-        self._s = s = _wrap(s * _DEG)
+            sin_e = -sin_e
+        s = (_atan2(wr, wz) - _atan2(f * sin_e, self._u + f * c)) * _DEG
+        if s > 180:  # the difference of two angles in -180..180: one turn at most
+            s -= 360
+        elif s <= -180:
+            s += 360
+        self._s = s
         self._e = e = e * _DEG
-        self._w = w = _wrap(90 - pitch - s - e)
+        w = 90 - pitch - s - e
+        if w > 180 or w <= -180:
+            w = _wrap(w)
+        self._w = w
         if strict:
             joints = self._joints
-            for i, value in ((1, s), (2, e), (3, w)):
-                joint = joints[i]
-                if not joint.lo <= value <= joint.hi:
-                    beyond = joint.lo - value if value < joint.lo else value - joint.hi
-                    self._why = (i, value, beyond, joint)
-                    return False
+            joint = joints[1]
+            if s < joint.lo or s > joint.hi:
+                return self._beyond(1, s)
+            joint = joints[2]
+            if e < joint.lo or e > joint.hi:
+                return self._beyond(2, e)
+            joint = joints[3]
+            if w < joint.lo or w > joint.hi:
+                return self._beyond(3, w)
         return True
+
+    def _beyond(self, i, value):
+        # False, and why in self._why: joint i would be at value, beyond its limits.
+        joint = self._joints[i]
+        beyond = joint.lo - value if value < joint.lo else value - joint.hi
+        self._why = (i, value, beyond, joint)
+        return False
 
     def _pitch(self, r, zz):
         # The pitch nearest -90 at which the plane's solve succeeds (self._s, _e, _w are its
@@ -250,12 +264,12 @@ class Arm:
         # shoulder's axis depends on the pitch's angle from phi, the tool point's direction
         # from that axis. It is in reach where that angle is lo..hi degrees either way.
         h = self._h
-        d = math.sqrt(r * r + zz * zz)
+        d = _sqrt(r * r + zz * zz)
         phi = -90.0
         lo = 0.0
         hi = 180.0
         if h * d > 1e-9:
-            phi = math.atan2(zz, r) * _DEG
+            phi = _atan2(zz, r) * _DEG
             far = self._u + self._f
             near = abs(self._u - self._f)
             cos_hi = (d * d + h * h - far * far) / (2 * h * d)
@@ -265,9 +279,9 @@ class Arm:
                 self._why, self._why_pitch = self._worst
                 return None
             if cos_hi > -1:
-                hi = math.acos(cos_hi) * _DEG
+                hi = _acos(cos_hi) * _DEG
             if cos_lo < 1:
-                lo = math.acos(cos_lo) * _DEG
+                lo = _acos(cos_lo) * _DEG
             # -90 failed: if it is out of reach, the edge of the reach nearest it (a hair
             # inside) is the answer, unless a joint's limit is in the way there too.
             off = _wrap(-90 - phi)
@@ -350,20 +364,64 @@ class Arm:
         pitch nearest -90), in one frame for the four joints: within ms, or at mm_s for the
         tool point and the wrist (from where the arm last went, read first if not known).
         Return the move's ms."""
-        if (ms is None) == (mm_s is None):
-            raise ValueError(
-                "give move_to() ms or mm_s (not both), got ms=%r mm_s=%r" % (ms, mm_s)
-            )
-        if ms is not None:
-            if _type(ms) is not _int:
-                raise TypeError("ms must be an int in 0..%d ms, got %r" % (_MS_MAX, ms))
-            if not 0 <= ms <= _MS_MAX:
-                raise ValueError("ms must be in 0..%d ms, got %r" % (_MS_MAX, ms))
+        # pose() is this with ms _SOLVE: the solve alone (the angles in self._a, the base, _s,
+        # _e and _w), nothing sent. One function for both, not a helper each calls: on
+        # MicroPython a call of a function with many locals takes a heap block, and a move
+        # with one fewer takes a fifth less time. The checks are inline (a call costs more
+        # than the check): _number() only to say what is wrong.
+        if ms is not _SOLVE:
+            if (ms is None) == (mm_s is None):
+                raise ValueError(
+                    "give move_to() ms or mm_s (not both), got ms=%r mm_s=%r" % (ms, mm_s)
+                )
+            if ms is not None:
+                if _type(ms) is not _int:
+                    raise TypeError("ms must be an int in 0..%d ms, got %r" % (_MS_MAX, ms))
+                if not 0 <= ms <= _MS_MAX:
+                    raise ValueError("ms must be in 0..%d ms, got %r" % (_MS_MAX, ms))
+            else:
+                _number("mm_s", mm_s, 0)
+                if not mm_s:
+                    raise ValueError("mm_s must be more than 0 mm/s, got %r" % (mm_s,))
+        t = _type(x)
+        if t is not _int and (t is not _float or not _NINF < x < _INF):
+            _number("x", x)
+        t = _type(y)
+        if t is not _int and (t is not _float or not _NINF < y < _INF):
+            _number("y", y)
+        t = _type(z)
+        if t is not _int and (t is not _float or not _NINF < z < _INF):
+            _number("z", z)
+        t = _type(pitch)
+        if pitch is not None and t is not _int and (t is not _float or not _NINF < pitch < _INF):
+            _number("pitch", pitch)
+        # The base's angle towards x, y (checked), or where it is if x, y is on its axis.
+        if x or y:
+            base = _atan2(y, x) * _DEG
         else:
-            _number("mm_s", mm_s, 0)
-            if not mm_s:
-                raise ValueError("mm_s must be more than 0 mm/s, got %r" % (mm_s,))
-        pose = self.pose(x, y, z, pitch)
+            base = self._at[0] if self._at else 0.0
+        joint = self._joints[0]
+        if base < joint.lo or base > joint.hi:
+            raise ValueError(
+                "(x, y, z) = (%.1f, %.1f, %.1f) mm: the base would be at %.1f degrees, beyond its"
+                " limits %.1f..%.1f" % (x, y, z, base, joint.lo, joint.hi)
+            )
+        r = _sqrt(x * x + y * y)
+        zz = z - self._b
+        if pitch is None:
+            pitch = self._pitch(r, zz)
+            if pitch is None:
+                raise ValueError(self._refusal(x, y, z, None))
+        elif not self._plane(r, zz, pitch, True):
+            raise ValueError(self._refusal(x, y, z, pitch))
+        self._a = base
+        if ms is _SOLVE:
+            return None
+        pose = self._target
+        pose["base"] = self._a
+        pose["shoulder"] = self._s
+        pose["elbow"] = self._e
+        pose["wrist"] = self._w
         if mm_s is not None:
             ms = math.ceil(self._distance(pose) * 1000 / mm_s - 1e-6)  # (float error)
             if ms > _MS_MAX:
@@ -375,7 +433,13 @@ class Arm:
         if robot.player:
             robot.player.stop()
         took = robot.move(pose, ms=ms)
-        self._at = [pose[name] for name in JOINTS]
+        at = self._at
+        if at is None:
+            self._at = at = [0.0] * 4
+        at[0] = pose["base"]
+        at[1] = pose["shoulder"]
+        at[2] = pose["elbow"]
+        at[3] = pose["wrist"]
         return took
 
     def _known(self):
@@ -392,16 +456,16 @@ class Arm:
         x0, y0, z0, p0 = self._point(at[0], at[1], at[2], at[3])
         x1, y1, z1, p1 = self._point(pose["base"], pose["shoulder"], pose["elbow"], pose["wrist"])
         h = self._h
-        tool = math.sqrt((x1 - x0) ** 2 + (y1 - y0) ** 2 + (z1 - z0) ** 2)
+        tool = _sqrt((x1 - x0) ** 2 + (y1 - y0) ** 2 + (z1 - z0) ** 2)
         # The wrist is the hand's length back from the tool point, along the hand.
         b0 = at[0] * _RAD
         b1 = pose["base"] * _RAD
-        q0 = math.cos(p0 * _RAD)
-        q1 = math.cos(p1 * _RAD)
-        dx = (x1 - h * q1 * math.cos(b1)) - (x0 - h * q0 * math.cos(b0))
-        dy = (y1 - h * q1 * math.sin(b1)) - (y0 - h * q0 * math.sin(b0))
-        dz = (z1 - h * math.sin(p1 * _RAD)) - (z0 - h * math.sin(p0 * _RAD))
-        return max(tool, math.sqrt(dx * dx + dy * dy + dz * dz), abs(_wrap(p1 - p0)))
+        q0 = _cos(p0 * _RAD)
+        q1 = _cos(p1 * _RAD)
+        dx = (x1 - h * q1 * _cos(b1)) - (x0 - h * q0 * _cos(b0))
+        dy = (y1 - h * q1 * _sin(b1)) - (y0 - h * q0 * _sin(b0))
+        dz = (z1 - h * _sin(p1 * _RAD)) - (z0 - h * _sin(p0 * _RAD))
+        return max(tool, _sqrt(dx * dx + dy * dy + dz * dz), abs(_wrap(p1 - p0)))
 
     def where(self, positions=None):
         """(x, y, z, pitch) of the tool point, from the joints' positions read now (a
@@ -440,7 +504,7 @@ class Line:
         # Check the line every _CHECK_MM (mm, and degrees of pitch), and time it: mm_s for
         # the tool point and the wrist, and no joint faster than _DPS of its dps.
         dx, dy, dz, dp = x - x0, y - y0, z - z0, _wrap(p1 - p0)  # the short way round
-        length = math.sqrt(dx * dx + dy * dy + dz * dz)
+        length = _sqrt(dx * dx + dy * dy + dz * dz)
         n = math.ceil(max(length, abs(dp), 1) / _CHECK_MM)
         n = min(n, _CHECKS_MAX)
         self.ms = arm._distance(end) * 1000 / mm_s
@@ -466,6 +530,7 @@ class Line:
         self.updates = 0  # frames of this line sent
         self.done = False
         self._dx, self._dy, self._dz, self._dp = dx, dy, dz, dp
+        self._from = (x0, y0, z0 - arm._b, p0)  # z from the shoulder's axis, for the solve
         self._t = -1  # the line's time at the last target streamed, in ms (-1: none yet)
         self._sent = 0  # ticks_ms then
         self._stepped = time.ticks_ms()
@@ -498,13 +563,19 @@ class Line:
             t += dt if dt < _LATE_MS else _LATE_MS
         u = t / self.ms if self.ms and t < self.ms else 1.0
         arm = self.arm
-        x0, y0, z0, p0 = self.start
-        x = x0 + self._dx * u
-        y = y0 + self._dy * u
+        x, y, zz, pitch = self._from  # (floats are heap objects: no sum where 0 is added)
+        if self._dx:
+            x += self._dx * u
+        if self._dy:
+            y += self._dy * u
+        if self._dz:
+            zz += self._dz * u
+        if self._dp:
+            pitch += self._dp * u
         pose = arm._pose
         if x or y:
-            pose["base"] = math.atan2(y, x) * _DEG
-        arm._plane(math.sqrt(x * x + y * y), z0 + self._dz * u - arm._b, p0 + self._dp * u, False)
+            pose["base"] = _atan2(y, x) * _DEG
+        arm._plane(_sqrt(x * x + y * y), zz, pitch, False)
         pose["shoulder"] = arm._s
         pose["elbow"] = arm._e
         pose["wrist"] = arm._w
@@ -515,8 +586,10 @@ class Line:
         self._sent = now
         self.updates += 1
         at = arm._at
-        for i in range(4):
-            at[i] = pose[JOINTS[i]]
+        at[0] = pose["base"]
+        at[1] = arm._s
+        at[2] = arm._e
+        at[3] = arm._w
         if u >= 1:
             self._end()
         return True

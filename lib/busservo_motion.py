@@ -171,13 +171,14 @@ class Joint:
             # top 22 bits of its significand m (1 <= m / 2**21 < 2), degrees =
             # m * 2**(e - 148). |degrees| < 512, so the shift is to the right, and
             # m * num < 2**30 stays a small int on a 32-bit port.
-            pack_into("<f", _bits, 0, degrees)
             b = _bits
-            shift = 148 - _Q - ((b[3] & 0x7F) << 1 | b[2] >> 7)
-            m = ((b[2] | 0x80) << 16 | b[1] << 8 | b[0]) >> 2
-            q = 0 if shift > 40 else ((m * self._num) >> shift) // self._den
-            if b[3] & 0x80:
-                q = -q
+            pack_into("<f", b, 0, degrees)
+            q = b[3]  # the sign, and the exponent's top 7 bits (each byte read once)
+            m = b[2]
+            shift = 148 - _Q - ((q & 0x7F) << 1 | m >> 7)
+            m = ((m | 0x80) << 16 | b[1] << 8 | b[0]) >> 2
+            m = 0 if shift > 40 else ((m * self._num) >> shift) // self._den
+            q = -m if q & 0x80 else m
         return (self._c + q + (1 << (_Q - 1))) >> _Q
 
     def degrees(self, position):
@@ -230,6 +231,9 @@ class Robot:
         self._pairs = [[joint.servo_id, 0] for joint in self._joints]
         self._live = []  # pairs of the joints in the stream, in the order they came
         self._live_i = []  # their joints' indices
+        self._sends = {}  # {k: a list of k pairs}: a move's frame, made once for each k
+        self._sel = [0] * n  # a move's joints' indices (Robot._move())
+        self._put = [0] * n  # and their positions
         self._in = bytearray(n)  # 1: the joint is in the stream
         self._fresh = False  # targets not yet sent
         now = time.ticks_ms()
@@ -280,18 +284,8 @@ class Robot:
         return i
 
     def _targets(self, targets):
-        # {index: position} of a pose {name: degrees}, all checked; counts clamps.
-        if _type(targets) is not dict or not targets:
-            raise TypeError("targets must be a dict {joint name: degrees}, got %r" % (targets,))
-        out = {}
-        clamped = 0
-        for name, degrees in targets.items():
-            i = self._i(name)
-            number("targets[%r]" % name, degrees)
-            joint = self._joints[i]
-            clamped += not joint.lo <= degrees <= joint.hi
-            out[i] = joint.position(degrees)
-        return out, clamped
+        # Check a pose {name: degrees} (for a Player, home()), as move() does; nothing sent.
+        self._move(targets, 0, None, False)
 
     def _read(self, indices, got=None):
         # Read positions of these joints into _at (or take them from got). A servo that
@@ -318,35 +312,93 @@ class Robot:
         if (ms is None) == (dps is None):
             raise ValueError("give move() ms or dps (not both), got ms=%r dps=%r" % (ms, dps))
         if ms is not None:
-            _ms("ms", ms)
+            if _type(ms) is not _int or not 0 <= ms <= _MS_MAX:
+                _ms("ms", ms)  # raises, naming it
         else:
             _dps(dps)
-        pose, clamped = self._targets(targets)
+        return self._move(targets, ms, dps, True)
+
+    def _move(self, targets, ms, dps, send):
+        # move()'s work, in one function (on MicroPython a call of one with many locals takes
+        # a heap block): check targets (the one place they are checked: _targets() too), then
+        # if send, time the move and send it. No comprehensions, items(), dicts or tuples:
+        # each is a heap object. The joints' indices go in _sel[:k], their positions in
+        # _put[index], both made once in Robot().
+        if _type(targets) is not dict or not targets:
+            raise TypeError("targets must be a dict {joint name: degrees}, got %r" % (targets,))
+        clamped = 0
+        index = self._index
         joints = self._joints
+        sel = self._sel
+        put = self._put
+        k = 0
+        capped = dps  # a speed to keep: the call's, or a joint's own
+        for name in targets:
+            i = index.get(name) if _type(name) is str else None
+            if i is None:
+                self._i(name)  # raises, naming the joints
+            degrees = targets[name]
+            t = _type(degrees)
+            if t is not _int and (t is not _float or not _NINF < degrees < _INF):
+                number("targets[%r]" % name, degrees)  # raises, naming it
+            joint = joints[i]
+            if degrees < joint.lo or degrees > joint.hi:
+                clamped += 1
+            put[i] = joint.position(degrees)
+            sel[k] = i
+            k += 1
+            if joint.dps:
+                capped = True
+        if not send:
+            return 0
         at = self._at
-        unknown = [i for i in pose if at[i] is None and (dps or joints[i].dps)]
-        if unknown:
-            self._read(unknown)  # a speed needs a distance: where are they?
         took = ms or 0
-        if dps:
-            for i, position in pose.items():
-                took = max(took, _time(abs(position - at[i]) / joints[i].per_degree, dps))
         slowed = 0
-        for i, position in pose.items():
-            if joints[i].dps:
-                need = _time(abs(position - at[i]) / joints[i].per_degree, joints[i].dps)
-                if need > took:
-                    took = need
-                    slowed = 1
-        if took > _MS_MAX:
-            raise ValueError(
-                "the move would take %d ms, more than %d: move in steps, or faster"
-                % (took, _MS_MAX)
-            )
+        if capped:
+            unknown = None
+            for j in range(k):
+                i = sel[j]
+                if at[i] is None and (dps or joints[i].dps):
+                    if unknown is None:
+                        unknown = []
+                    unknown.append(i)
+            if unknown:
+                self._read(unknown)  # a speed needs a distance: where are they?
+            if dps:
+                for j in range(k):
+                    i = sel[j]
+                    need = _time(abs(put[i] - at[i]) / joints[i].per_degree, dps)
+                    if need > took:
+                        took = need
+            for j in range(k):
+                i = sel[j]
+                joint = joints[i]
+                if joint.dps:
+                    need = _time(abs(put[i] - at[i]) / joint.per_degree, joint.dps)
+                    if need > took:
+                        took = need
+                        slowed = 1
+            if took > _MS_MAX:
+                raise ValueError(
+                    "the move would take %d ms, more than %d: move in steps, or faster"
+                    % (took, _MS_MAX)
+                )
         self._stop_stream()
-        self.bus.move_many([(self._ids[i], p) for i, p in pose.items()], took)
-        for i, position in pose.items():
-            at[i] = position
+        # The frame's [id, position] pairs are the stream's (it has ended), in a list of k
+        # made once: a move allocates no pairs.
+        pairs = self._pairs
+        sends = self._sends.get(k)
+        if sends is None:
+            sends = self._sends[k] = [None] * k
+        for j in range(k):
+            i = sel[j]
+            pair = pairs[i]
+            pair[1] = put[i]
+            sends[j] = pair
+        self.bus.move_many(sends, took)
+        for j in range(k):
+            i = sel[j]
+            at[i] = put[i]
         self.clamped += clamped
         self.slowed += slowed
         return took
@@ -426,11 +478,13 @@ class Robot:
                     % name
                 )
             tmp[i] = joint.position(degrees)
+        goal = self._goal
+        streamed = self._in
         for name in targets:
             i = index[name]
-            self._goal[i] = tmp[i]
-            if not self._in[i]:
-                self._in[i] = 1
+            goal[i] = tmp[i]
+            if not streamed[i]:
+                streamed[i] = 1
                 self._live.append(self._pairs[i])
                 self._live_i.append(i)
         now = time.ticks_ms()
@@ -483,8 +537,9 @@ class Robot:
             elapsed = cap
         glide = ms
         fresh = False
+        live_i = self._live_i
         for k in range(len(live)):
-            i = self._live_i[k]
+            i = live_i[k]
             position = goal[i]
             pps = joints[i]._pps
             if pps:  # no faster than the joint's dps: step towards the goal
@@ -508,7 +563,7 @@ class Robot:
         self._ms = glide
         self._slowing = fresh or glide > ms  # still on its way: the next frame waits
         for k in range(len(live)):
-            at[self._live_i[k]] = live[k][1]
+            at[live_i[k]] = live[k][1]
         if fresh:
             self.slowed += 1
         self._fresh = fresh
@@ -530,10 +585,11 @@ class Robot:
     def _stop_stream(self):
         # Forget the stream's targets: a later stream() starts afresh.
         self._fresh = False
-        self._live.clear()
-        self._live_i.clear()
-        for i in range(len(self._in)):
-            self._in[i] = 0
+        if self._live:
+            for i in self._live_i:
+                self._in[i] = 0
+            self._live.clear()
+            self._live_i.clear()
 
 
 def _time(degrees, dps):

