@@ -570,50 +570,6 @@ class Playing(Tidy):
         self.assertTrue(len(ticks) > 100, len(ticks))  # the other task ran meanwhile
 
 
-class TodaysPlayer(Tidy):
-    # Two things busservo_motion's Player does right that no test would miss if they broke
-    # (issue 29); the same for Playback is tested above.
-    def test_a_pose_a_joints_dps_slows_is_waited_for_its_real_time_not_the_ms_asked(self):
-        w, bus = world()
-        robot = bm.Robot(bus, {"j1": bm.Joint(1, dps=30), "j2": bm.Joint(2)})
-        robot.home(pose={"j1": 0, "j2": 0}, dps=1000)
-        w.run_ms(100)
-        first = w.frames_total
-        player = bm.Sequence([({"j1": 60}, 100), ({"j1": 0, "j2": 10}, 100)]).play(robot)
-        for _ in range(5000):
-            player.step()
-            w.clock.advance_ms(1)
-        got = moves(w, first)
-        self.assertEqual([ms for _, ms, _ in got], [2000, 2000])  # 60 degrees at 30 a second
-        self.assertTrue(got[1][0] - got[0][0] >= 2000000 - 1000, got[1][0] - got[0][0])
-
-    def test_a_line_started_while_a_sequence_plays_stops_the_sequence(self):
-        import busservo_arm as ba
-
-        before = ba.time
-        w, bus = world()
-        ba.time = w.clock
-        try:
-            robot = arm_robot(bus)
-            arm = ba.Arm(robot, {"base_height": 70, "upper_arm": 105, "forearm": 98, "hand": 150})
-            arm.move_to(150, 0, 100, ms=0)
-            seq = bm.Sequence([({"base": 10}, 300), ({"base": 20}, 300), ({"base": 30}, 300)])
-            player = seq.play(robot)
-            self.assertTrue(player.step())
-            line = arm.line_to(150, 0, 60)
-            self.assertTrue(player.done and robot.player is line)
-            robot.estop()  # stops the line: nothing else drives the joints
-            self.assertTrue(line.done and robot.player is None)
-            w.run_ms(100)
-            sent = len(moves(w))
-            for _ in range(1000):
-                self.assertFalse(player.step() or line.step())
-                w.clock.advance_ms(1)
-            self.assertEqual(len(moves(w)), sent)
-        finally:
-            ba.time = before
-
-
 class Interrupted:
     """time, on the world's clock, with Ctrl-C pressed during the first sleep."""
 
