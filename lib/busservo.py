@@ -433,19 +433,23 @@ class BusServo:
                 and (over >= _LATE_MS or r >= self._w or self._rx[r] != cmd)
                 or late > _QUEUE
             ):
-                if waiting[kind + 8] and waiting[kind + 10]:
-                    # A reply that fits came too soon and was taken for a late one, and
-                    # none came after it, from a peer not known to be as slow as the
-                    # wire: it was this one (and the late ones were lost, as the
-                    # controller answers in turn). It is no event: taken back from
-                    # poll()'s, if it is the last held.
-                    waiting[kind] = waiting[kind + 2] = 0
-                    waiting[kind + 10] = 1
-                    self.early += 1
-                    got = self._queued - 1
-                    if got >= 0 and self._queue[got] == cmd:
-                        self._queued = got
-                    return
+                if waiting[kind + 8]:
+                    if waiting[kind + 10]:
+                        # A reply that fits came too soon and was taken for a late one,
+                        # and none came after it, from a peer not known to be as slow as
+                        # the wire: it was this one (and the late ones were lost, as the
+                        # controller answers in turn). It is no event: taken back from
+                        # poll()'s, if it is the last held.
+                        waiting[kind] = waiting[kind + 2] = 0
+                        waiting[kind + 10] = 1
+                        self.early += 1
+                        got = self._queued - 1
+                        if got >= 0 and self._queue[got] == cmd:
+                            self._queued = got
+                        return
+                    # From a peer taken for one as slow as the wire: one reply showed it,
+                    # which a program busy elsewhere may have read late. Not known now.
+                    waiting[kind + 10] = 2
                 raise OSError(errno.ETIMEDOUT, "no reply")
             if got is None:
                 yield
