@@ -17,6 +17,7 @@ from busservo import CMD_SERVO_MOVE as MOVE
 from fakeuart import FakeUART
 from shell import scratch
 from test_alloc import heap_per_call
+from test_motion import raises
 
 PER_DEGREE = 25 / 6  # a bus servo's positions per degree
 
@@ -60,18 +61,6 @@ def moves(w, first=0):
             pos = {f[i]: f[i + 1] | f[i + 2] << 8 for i in range(7, len(f), 3)}
             out.append((us, f[5] | f[6] << 8, pos))
     return out
-
-
-def raises(call, *words):
-    """The ValueError or TypeError call() raises: its message, which must hold words."""
-    try:
-        call()
-    except (ValueError, TypeError) as e:
-        text = str(e)
-        for word in words:
-            assert word in text, "%r not in %r" % (word, text)
-        return text
-    raise AssertionError("no error")
 
 
 class Tidy(unittest.TestCase):
