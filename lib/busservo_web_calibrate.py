@@ -171,7 +171,7 @@ class Calibrate:
         orders = panel.orders
         await panel.where()  # where the limp joints were left: the home's distances
         if panel.orders != orders or self.cal is not cal:
-            raise web.Refused(409, "stopped while reading: home again")
+            raise web.Refused(409, "stopped while reading: not homed (the calibration is saved)")
         robot = panel.robot
         pose = {n: min(max(0, j.lo), j.hi) for n, j in robot.joints.items()}
         self._end()
