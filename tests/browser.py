@@ -814,7 +814,12 @@ class ArmBrowsing(Browsing):
         self.press(button)
 
     def hands(self, k, only=(1, 2, 3, 4)):
+        """The person's hands put each servo in only at HANDS[id][k], and hold them there
+        until the panel has read them (twice more: a reply is in before the next request
+        goes). A busy machine may stretch a read's time: a fixed wait would miss one."""
+        reads = controller()["reads"]
         turn(*[(i, HANDS[i][k]) for i in only])
+        self.assertIsNotNone(until(lambda: controller()["reads"] >= reads + 2, 10.0))
 
     def sweep(self, still=()):
         """Start a calibration, hold the rest pose, and sweep the joints (the servos in still
@@ -823,12 +828,10 @@ class ArmBrowsing(Browsing):
         self.assertIsNotNone(until(lambda: controller()["limp"] == [1, 2, 3, 4]))
         self.hands(0)
         self.assertIsNotNone(until(lambda: self.text("calgo") == "Rest pose held"))
-        time.sleep(0.3)
         self.press("calgo")
         self.assertIsNotNone(until(lambda: self.text("calgo") == "Ranges done"))
         for k in (1, 2, 0):
             self.hands(k, [i for i in (1, 2, 3, 4) if i not in still])
-            time.sleep(0.5)  # read a few times meanwhile
         self.assertIn("° seen", self.text("calseen"))
         self.press("calgo")
 
@@ -838,7 +841,6 @@ class ArmBrowsing(Browsing):
         self.sweep(still)
         self.assertIsNotNone(until(lambda: self.text("calgo") == "Nudged"))
         self.hands(3, [i for i in (1, 2, 3, 4) if i not in unnudged])
-        time.sleep(0.5)
         self.press("calgo")
 
     def refusals(self, word):
@@ -913,7 +915,6 @@ class ArmPanel(ArmBrowsing):
         self.assertEqual(self.text("calgo"), "Ranges done")
         for k in (1, 2, 0):
             self.hands(k, [3])
-            time.sleep(0.5)
         self.press("calgo")  # the elbow swept now: taken, and the refusal goes
         self.assertIsNotNone(until(lambda: self.text("calgo") == "Nudged"), self.cal_text())
         self.assertEqual(self.refusals(""), [])
@@ -962,7 +963,6 @@ class ArmPanel(ArmBrowsing):
         self.assertEqual(len(self.refusals("elbow")), 1, self.cal_text())
         self.assertEqual(self.cal_text().count("too little to tell"), 1, self.cal_text())
         self.hands(3, [3])  # nudged now
-        time.sleep(0.5)
         self.press("calgo")
         self.assertIsNotNone(until(lambda: self.text("calgo") == "Save"), self.cal_text())
         self.assertEqual(self.refusals(""), [])  # gone, as the step was taken

@@ -33,18 +33,22 @@ def robot(world):
 
 class Moves:
     """A world's on_frame: counts the CMD_SERVO_MOVE frames the controller took and
-    keeps the last MOVES of them, so that a probe costs the same after hours."""
+    keeps the last MOVES of them, so that a probe costs the same after hours; and counts
+    the positions requests (reads)."""
 
     MOVES = 20
 
     def __init__(self):
         self.count = 0
+        self.reads = 0
         self._last = [None] * self.MOVES
 
     def __call__(self, us, frame):
         if frame[3] == busservo.CMD_SERVO_MOVE:
             self._last[self.count % self.MOVES] = frame
             self.count += 1
+        elif frame[3] == busservo.CMD_MULT_SERVO_POS_READ:
+            self.reads += 1
 
     def last(self):
         """The last MOVES moves, oldest first, as [time_ms, {id: position}]."""
@@ -66,7 +70,8 @@ def live(port="rp2"):
 
 def controller(world):
     """What the controller knows: {"at": {id: position}, "limp": [ids], "moved": how many
-    CMD_SERVO_MOVE it took, "moves": the last 20 of them as [time_ms, {id: position}]}."""
+    CMD_SERVO_MOVE it took, "moves": the last 20 of them as [time_ms, {id: position}],
+    "reads": how many positions requests it took}."""
     sim = world.sim
     moves = world.on_frame
     return {
@@ -74,6 +79,7 @@ def controller(world):
         "limp": sorted(sim.limp),
         "moved": moves.count,
         "moves": moves.last(),
+        "reads": moves.reads,
     }
 
 
