@@ -565,6 +565,41 @@ class Recorded(Tidy):
             self.assertEqual(rec.samples, t.reads)
             self.assertTrue(t.reads > 400)
 
+    def test_a_late_reply_is_never_taken_for_the_next_reads(self):
+        # The hand turns the leader's base a position every 25 ms, so a sample's position says
+        # when the controller read it: never before the request the sample was taken for
+        # (the last to reach the controller), though replies come 300 ms late now and then.
+        # (A reader of the driver's request_positions() and poll() alone, with no ask(), takes
+        # the late reply for the next read's, and every read after it is one behind.)
+        for port in wire.PORTS:
+            wl, wf, lead, follow = two_uarts(port)
+            clock = wl.clock
+            start = clock.now_us
+            asked = []  # ms each request of the leader was in at its controller
+            wl.on_frame = lambda us, f, asked=asked: f[3] == READ and asked.append(us)
+            rec = br.Recorder(lead)
+            t = bt.Teleop(lead, follow, dps=60, rest=False, recorder=rec)
+            stale = []
+            take = rec.take
+
+            def taken(ms, positions, take=take, asked=asked, stale=stale):
+                if positions is not None and positions.get(1) is not None:
+                    want = 100 + (asked[-1] - start) // 25000  # where the hand had it then
+                    if positions[1] < want - 1:
+                        stale.append((positions[1], want))
+                return take(ms, positions)
+
+            rec.take = taken
+            for ms in range(20000):
+                if ms % 1000 == 500:
+                    wl.late(300)
+                wl.sim.turn(1, 100 + (clock.now_us - start) // 25000)
+                t.step()
+                clock.advance_ms(1)
+            self.assertEqual((len(stale), stale[:3]), (0, []))
+            self.assertTrue(t.timeouts >= 15, t.timeouts)
+            self.assertTrue(rec.samples > 300, rec.samples)
+
     def test_the_recorder_must_record_joints_the_teleop_reads(self):
         clock = wire.Clock()
         wl = wire.World("rp2", clock=clock)
