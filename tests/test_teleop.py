@@ -582,7 +582,7 @@ class Recorded(Tidy):
             stale = []
             take = rec.take
 
-            def taken(ms, positions, take=take, asked=asked, stale=stale):
+            def taken(ms, positions, take=take, asked=asked, stale=stale, start=start):
                 if positions is not None and positions.get(1) is not None:
                     want = 100 + (asked[-1] - start) // 25000  # where the hand had it then
                     if positions[1] < want - 1:
