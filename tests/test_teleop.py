@@ -4,6 +4,7 @@
 # bus. The driver, the motion layer and the teleop all run on the world's clock.
 import asyncio
 import math
+import os
 import time
 import unittest
 
@@ -16,6 +17,7 @@ from busservo import CMD_MULT_SERVO_POS_READ as READ
 from busservo import CMD_MULT_SERVO_UNLOAD as UNLOAD
 from busservo import CMD_SERVO_MOVE as MOVE
 from fakeuart import FakeUART
+from shell import scratch
 from test_alloc import heap_per_call
 
 NAMES = ("base", "shoulder", "elbow", "wrist", "roll", "gripper")
@@ -678,6 +680,27 @@ class Budget(Tidy):
         self.assertEqual(t.moves, moves + 21)  # (one step to warm up, then 20)
         self.assertEqual(heap_per_call(t.step), 0)  # waiting for the reply
         self.assertEqual(t.moves, moves + 21)
+        # Recording the leader too: its take() allocates nothing, nor does the file's write of
+        # a piece (one comes within the 20 steps measured, after 30 to warm up).
+        path = scratch("teleop-budget") + ".rec"
+        try:
+            rec = br.Recorder(lead, path=path, limp=False)
+            t = bt.Teleop(lead, follow, rest=False, recorder=rec)
+            t.step()
+            clock.advance_ms(40)
+            fu.feed(positions_reply(range(1, 7), 500))
+            t.step()
+            for _ in range(30):
+                reply()
+                t.step()
+            self.assertTrue(t.engaged)
+            written = os.stat(path)[6]
+            self.assertEqual(heap_per_call(t.step, reply), ask)
+            self.assertTrue(os.stat(path)[6] >= written + br.PIECE)
+            self.assertEqual(rec.samples, t.reads)
+            rec.stop()
+        finally:
+            os.remove(path)
 
 
 if __name__ == "__main__":
