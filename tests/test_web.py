@@ -2463,11 +2463,19 @@ class Recording(Tidy):
                     seen(us, f)
 
             world.on_frame = frame
+
+            async def followed(position):  # the page open meanwhile (else the dead-man)
+                for _ in range(30):
+                    if abs(world.sim.position(1) - position) <= 2:
+                        return True
+                    await polled(port, token, 200)
+                return False
+
             token = await armed(port)
             await http(port, "POST", "/api/teleop", {"on": True}, token)
             self.assertTrue(await until(lambda: {11, 12, 13, 14} <= world.sim.limp))
             world.sim.turn(11, 600)
-            self.assertTrue(await until(lambda: abs(world.sim.position(1) - 600) <= 2, 6000))
+            self.assertTrue(await followed(600))
             status, reply = await http(port, "POST", "/api/record", {"on": True}, token)
             self.assertEqual(status, 200, reply)
             self.assertEqual((reply["rec"]["recording"], reply["rec"]["leader"]), (True, True))
@@ -2495,7 +2503,7 @@ class Recording(Tidy):
             self.assertAlmostEqual(last["base"], leader.joints["base"].degrees(700), 0)
             self.assertTrue(os.stat(busservo_web_record.FILE)[6] > 0)  # on the board's flash
             world.sim.turn(11, 500)  # the teleop goes on
-            self.assertTrue(await until(lambda: abs(world.sim.position(1) - 500) <= 2, 6000))
+            self.assertTrue(await followed(500))
             # Recorded again, the teleop turned off ends the recording too, and keeps it.
             await http(port, "POST", "/api/record", {"on": True}, token)
             await polled(port, token, 400)
