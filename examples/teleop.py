@@ -5,7 +5,9 @@
 # servos 7..10. The follower first goes to the leader's pose at 30 degrees/s, then follows it
 # at the wire's pace (about 26 cycles a second for 6 servos each); a joint that does not
 # answer holds it, by name. It runs for SECONDS and says its rate each second. Two arms on two
-# UARTs: give the follower a BusServo of its own, the rest is the same.
+# UARTs: give the follower a BusServo of its own, the rest is the same. RECORD = "leader.rec"
+# records the leader too, from the same reads (play it back with examples/record.py's
+# Recording.load(); it needs busservo_record: mpremote mip install lib/busservo_record.json).
 #   mpremote mip install lib/busservo_teleop.json   # once: the driver, motion, teleop
 #   mpremote run examples/teleop.py
 #   sh boards/unix.sh examples/teleop.py            # unix port, simulated controller
@@ -22,6 +24,7 @@ DPS: int | None = 30  # on a real robot no follower joint turns faster (degrees 
 SECONDS = 10  # how long it runs (mpremote run forwards no Ctrl-C: it ends by itself)
 FOLLOWER = "follower.json"  # the follower's calibration, if you saved one
 OFFSET = 6  # without it: the demo's arm on servos 1 + OFFSET.. (7..10)
+RECORD: str | None = None  # a file ("leader.rec") to record the leader's reads into, too
 
 bus = busservo_board.bus()  # board.py's UART, or the simulated controller
 if busservo_board.simulated:
@@ -52,7 +55,14 @@ if not I_HAVE_CHECKED_MY_ROBOT:
     print("nothing moved: check, then set I_HAVE_CHECKED_MY_ROBOT = True (top of this file)")
     raise SystemExit
 
-teleop = busservo_teleop.Teleop(leader, follower, dps=30)  # warns of calibrations that disagree
+recorder = None
+if RECORD:
+    import busservo_record
+
+    names = [n for n in leader.names if n in follower.joints]  # the joints the teleop reads
+    recorder = busservo_record.Recorder(leader, names, RECORD, limp=False)
+# It warns of calibrations that disagree; with a recorder, it gives it each read of the leader.
+teleop = busservo_teleop.Teleop(leader, follower, dps=30, recorder=recorder)
 print("the leader is limp: move it by hand")
 start = time.ticks_ms()
 second = reads = 0
@@ -71,3 +81,6 @@ print(
     "done: %d reads of the leader, %d moves of the follower, %d reads timed out"
     % (teleop.reads, teleop.moves, teleop.timeouts)
 )
+if recorder:
+    recording = recorder.stop()
+    print("recorded %d samples of the leader into %s" % (len(recording), RECORD))

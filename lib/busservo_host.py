@@ -212,10 +212,11 @@ _USAGE = """usage: busservo COMMAND ...
                                        degrees/s, then at its pace, X times (0.25..2, 1);
                                        Ctrl-C stops it where it is
   busservo teleop LEADER [FOLLOWER] --leader-calibration F1
-                  --follower-calibration F2 [%(checked)s]
+                  --follower-calibration F2 [--record FILE] [%(checked)s]
                                        the leader arm, limp, moved by hand, drives the
                                        follower live (each arm's robot.json: F1, F2); one
-                                       PORT: both arms on its bus; Ctrl-C stops it
+                                       PORT: both arms on its bus; Ctrl-C stops it; with
+                                       --record, each read of the leader goes into FILE too
   busservo --version                   busservo's version
 PORT is /dev/ttyUSB0, COM3, ... (a serial port), hid or hid:PATH (a USB HID controller: the
 first found, or that one), or --sim: a simulated controller, servos 1..6 (nothing real moves).
@@ -238,7 +239,7 @@ _TAKES = {
     "panel": ("--password", "--port", "--host", "--timeout"),
     "record": ("--seconds", "--timeout"),
     "play": ("--speed",),
-    "teleop": ("--leader-calibration", "--follower-calibration", "--timeout"),
+    "teleop": ("--leader-calibration", "--follower-calibration", "--timeout", "--record"),
 }
 _VALUED = {
     "--password": "P",
@@ -249,6 +250,7 @@ _VALUED = {
     "--speed": "X",
     "--leader-calibration": "F1",
     "--follower-calibration": "F2",
+    "--record": "FILE",
 }
 _FLAGS = ("--json", _CHECKED, "-h", "--help", "-V", "--version")
 # The command's queries wait this long for an answer (and _PER_ID_MS more a servo asked, for
@@ -716,11 +718,7 @@ def _record(run, words, options):
     seconds = None
     if "--seconds" in options:
         seconds = _number(options["--seconds"], "--seconds", 0.1, 86400)
-    folder = os.path.dirname(path) or "."
-    if not os.path.isdir(folder):
-        raise _Usage("no folder %s for FILE %s" % (folder, path))
-    if os.path.isdir(path):
-        raise _Usage("%s is a folder: FILE is the recording's file" % path)
+    _writable(path)
     bus, _ = _bus(run)
     robot = _robot(bus, None)
     _answers(bus, run)
@@ -741,14 +739,28 @@ def _record(run, words, options):
     except KeyboardInterrupt:
         pass  # the normal end of a recording
     recording = recorder.stop()
-    print(
-        "saved %s: %d samples over %.1f s, %d reads missed"
-        % (path, len(recording), recording.duration_ms / 1000, recorder.missed)
-    )
+    _saved(path, recording, recorder.missed)
     if not len(recording):
         print("no sample: no read was answered (the servos' power, the bus cable, their ids)")
         return 1
     return 0
+
+
+def _writable(path):
+    # A recording's FILE: its folder must be there, and it must be no folder itself.
+    folder = os.path.dirname(path) or "."
+    if not os.path.isdir(folder):
+        raise _Usage("no folder %s for FILE %s" % (folder, path))
+    if os.path.isdir(path):
+        raise _Usage("%s is a folder: FILE is the recording's file" % path)
+
+
+def _saved(path, recording, missed):
+    # What a recording command says at its end.
+    print(
+        "saved %s: %d samples over %.1f s, %d reads missed"
+        % (path, len(recording), recording.duration_ms / 1000, missed)
+    )
 
 
 def _recording(path):
@@ -838,6 +850,9 @@ def _teleop(run, words, options):
         )
     lead = _calibration(lpath, "--leader-calibration")
     follow = _calibration(fpath, "--follower-calibration")
+    path = options.get("--record")
+    if path is not None:
+        _writable(path)
     lids = [lead.joints[name].servo_id for name in lead.names]
     fids = [follow.joints[name].servo_id for name in follow.names]
     shared = not words
@@ -871,9 +886,19 @@ def _teleop(run, words, options):
         print("nothing moved: hold the leader, check that the follower can turn freely, then")
         print("add " + _CHECKED)
         return 1
-    teleop = busservo_teleop.Teleop(leader, follower, dps=_PLAY_DPS, timeout_ms=run.timeout)
+    recorder = None
+    if path is not None:
+        import busservo_record
+
+        names = [name for name in leader.names if name in follower.joints]
+        recorder = busservo_record.Recorder(leader, names, path, limp=False)
+    teleop = busservo_teleop.Teleop(
+        leader, follower, dps=_PLAY_DPS, timeout_ms=run.timeout, recorder=recorder
+    )
     teleop.warn = lambda text: print(text, flush=True)
     print("the leader drives the follower (Ctrl-C stops it)", flush=True)
+    if recorder:
+        print("recording the leader into %s" % path, flush=True)
     then = time.monotonic()
     reads = 0
     try:
@@ -898,6 +923,9 @@ def _teleop(run, words, options):
         at = _halt(follower, run)
         print("stopped: the follower holds at %s; the leader is limp" % at)
         return 130
+    finally:
+        if recorder:
+            _saved(path, recorder.stop(), recorder.missed)
     return 0
 
 

@@ -22,6 +22,10 @@
 # interrupts meanwhile: its UART's 32-byte FIFO is all that listens). So samples wait in RAM and
 # go to the file a piece (256 bytes) at a time, only between a reply and the next request: then
 # nothing is due from the controller, and the erase delays the next read, not a byte of a reply.
+#
+# Recording while a leader drives a follower (busservo_teleop.Teleop(..., recorder=rec)): the
+# Teleop reads the leader, and gives each read to take(), between the reply and its next
+# request. The leader is read once a cycle, for both.
 import errno
 import json
 import time
@@ -99,6 +103,7 @@ class Recorder:
         self._w = 0  # bytes in _buf
         self._quiet = False  # the last read was answered: nothing is due from the controller
         self._query = None  # the read under way (the driver's ask())
+        self._fed = False  # take() gives it the reads: it makes none of its own
         self._file = None
         self._data = bytearray()  # in RAM: no path, or JSON lines (written at stop())
         if path is not None and not path.endswith(".jsonl"):
@@ -111,7 +116,7 @@ class Recorder:
     def step(self):
         """From the control loop: take a reply if one has come, and ask for the next read.
         Never waits for the wire. True if a sample was kept."""
-        if self.done:
+        if self.done or self._fed:
             return False
         query = self._query
         if query is None:
@@ -142,6 +147,31 @@ class Recorder:
             got[i] = p
         self._quiet = True
         self._keep(now)
+        return True
+
+    def take(self, ticks_ms, positions):
+        """A read made elsewhere (a busservo_teleop.Teleop's of its leader): positions
+        {servo_id: position}, as the bus's positions hold a reply, taken at ticks_ms; None
+        for a read that failed, counted in missed. Call it between a reply and the next
+        request: a full piece goes to the file then. Once given one, step() reads nothing.
+        True if a sample was kept."""
+        self._fed = True
+        if self.done:
+            return False
+        if positions is None:
+            self.missed += 1
+            return False
+        ids = self._ids
+        got = self._got
+        for i in range(self._n):
+            p = positions.get(ids[i])
+            if p is None:  # a servo that does not answer: no sample
+                self.missed += 1
+                return False
+            got[i] = p
+        self._keep(ticks_ms)
+        if self._w >= PIECE:
+            self._write()  # between a reply and the next request: nothing is due
         return True
 
     def _keep(self, now):

@@ -17,7 +17,7 @@ the calibration the recording keeps, when it is read. Bad input raises ValueErro
 naming the argument, what is allowed and what came.
 """
 
-from typing import Any, Final, Generator, Iterator
+from typing import Any, Final, Generator, Iterator, Mapping
 
 from busservo import BusServo
 from busservo_motion import Joint, Robot, Sequence
@@ -67,6 +67,12 @@ class Recorder:
         """From the control loop: take a reply if one has come, and ask for the next read.
         Never waits for the wire; a full piece goes to the file only between a reply and the
         next request. True if a sample was kept."""
+    def take(self, ticks_ms: int, positions: Mapping[int, int | None] | None) -> bool:
+        """A read made elsewhere (a busservo_teleop.Teleop's of its leader, given
+        Teleop(..., recorder=rec)): positions {servo_id: position}, as BusServo.positions
+        holds a reply, taken at ticks_ms; None for a read that failed (counted in missed).
+        Call it between a reply and the next request: a full piece goes to the file then.
+        Once given one, step() reads nothing. True if a sample was kept."""
     def stop(self) -> Recording:
         """Stop recording: what waits in RAM goes to the file, which is closed. Return the
         Recording (also self.recording). The joints stay limp."""

@@ -48,12 +48,14 @@ _ROOM_MS = const(5)  # a move goes when its wire is free within this (and a requ
 
 
 class Teleop:
-    def __init__(self, leader, follower, dps=30, rest=True, timeout_ms=None):
+    def __init__(self, leader, follower, dps=30, rest=True, timeout_ms=None, recorder=None):
         """leader drives follower, two busservo_motion Robots, their joints matched by name.
         dps: how fast the follower goes to the leader's pose before it follows (degrees/s).
         rest: both arms start in their rest pose, so their readings there are compared and a
         joint whose two calibrations disagree by more than REST degrees is warned of.
-        timeout_ms: each read's, as BusServo.ask() takes it (None: its default)."""
+        timeout_ms: each read's, as BusServo.ask() takes it (None: its default).
+        recorder: a busservo_record.Recorder of the leader, given each read of it (its
+        take()): the leader is recorded with no read of its own."""
         if not isinstance(leader, Robot) or not isinstance(follower, Robot):
             raise TypeError(
                 "leader and follower must be busservo_motion Robots, got %r and %r"
@@ -81,9 +83,12 @@ class Teleop:
                         "follower's %r are both servo %d"
                         % (other, name, follower.joints[name].servo_id)
                     )
+        if recorder is not None:
+            _recording(recorder, leader, names)
         self.leader = leader
         self.follower = follower
         self.names = names
+        self.recorder = recorder
         self.dps = dps
         self.rest = bool(rest)
         self.timeout_ms = timeout_ms
@@ -141,7 +146,6 @@ class Teleop:
         self.slowed = 0  # moves slowed to dps (engaging) or a joint's own dps
         self.warnings = []  # what was warned of (each also given to warn)
         self.warn = None  # where warnings go as they come: warn(text), or print if None
-        self.on_read = None  # on_read(ticks_ms, bus.positions) after each leader reply
         if follower.player:
             follower.player.stop()
         follower.player = self
@@ -173,6 +177,8 @@ class Teleop:
                 raise
             self._ask = None
             self.timeouts += 1
+            if self.recorder is not None and self._phase == 2:
+                self.recorder.take(time.ticks_ms(), None)  # a read skipped: counted
         return self._send()
 
     def _start(self):
@@ -209,6 +215,8 @@ class Teleop:
     def _leader_read(self):
         now = time.ticks_ms()
         positions = self.leader.bus.positions
+        if self.recorder is not None:  # before the next request: its file may be written
+            self.recorder.take(now, positions)
         goal = self._goal
         for k in range(len(goal)):
             p = positions.get(self._lids[k])
@@ -236,8 +244,6 @@ class Teleop:
         self.reads += 1
         self.read_at = now
         self._fresh = True
-        if self.on_read is not None:
-            self.on_read(now, positions)
 
     def _hold(self, k, arm, servo_id):
         # A servo that does not answer: nothing moves until it does; then engage again.
@@ -354,6 +360,22 @@ class Teleop:
         return self.run()
 
     __iter__ = __await__
+
+
+def _recording(recorder, leader, names):
+    # A recorder must record the leader, and only joints the teleop reads.
+    if not hasattr(recorder, "take") or not hasattr(recorder, "names"):
+        raise TypeError(
+            "recorder must be a busservo_record.Recorder (it has take()), got %r" % (recorder,)
+        )
+    if getattr(recorder, "robot", None) is not leader:
+        raise ValueError("recorder must record the leader: busservo_record.Recorder(leader)")
+    other = [name for name in recorder.names if name not in names]
+    if other:
+        raise ValueError(
+            "the recorder records joints %s, which the teleop does not read (it reads those "
+            "both arms have): Recorder(leader, names=%r)" % (", ".join(other), names)
+        )
 
 
 if _awaitable:  # CPython: await wants an iterator, not the coroutine MicroPython takes

@@ -15,9 +15,10 @@ dps and follows only once every joint is within ENGAGE degrees; a leader joint t
 answer holds it, naming the joint. The teleop is the follower's player: its estop() stops it.
 """
 
-from typing import Any, Callable, Generator, Mapping
+from typing import Any, Callable, Generator
 
 from busservo_motion import Robot
+from busservo_record import Recorder
 
 ENGAGE: int
 """Degrees: the follower follows freely once every joint is this near the leader's (3)."""
@@ -59,16 +60,15 @@ class Teleop:
     period_ms: int
     """ms between the last two replies of the leader: the rate is 1000 / period_ms a second."""
     read_at: int
-    """ticks_ms when the last reply of the leader came: its positions are in leader.bus.positions
-    (for a recording of the leader)."""
+    """ticks_ms when the last reply of the leader came: its positions are in
+    leader.bus.positions."""
     warnings: list[str]
     """What was warned of: a calibration that disagrees at rest, a joint that does not
     answer."""
     warn: Callable[[str], Any] | None
     """Where warnings go as they come: warn(text); None (the default) prints them."""
-    on_read: Callable[[int, Mapping[int, int | None]], Any] | None
-    """on_read(ticks_ms, positions) after each reply of the leader, positions being
-    leader.bus.positions {servo_id: position} (for a recording of the leader)."""
+    recorder: Recorder | None
+    """The Recorder of the leader given each read of it (Recorder.take()), or None."""
 
     def __init__(
         self,
@@ -77,11 +77,15 @@ class Teleop:
         dps: float = 30,
         rest: bool = True,
         timeout_ms: int | None = None,
+        recorder: Recorder | None = None,
     ) -> None:
         """leader drives follower, their joints matched by name. dps: how fast the follower
         goes to the leader's pose first. rest: both arms start in their rest pose (warn of a
         joint whose calibrations disagree there). timeout_ms: each read's (None: ask()'s
-        default). Registers as follower.player. Nothing is sent until the first step()."""
+        default). recorder: a busservo_record.Recorder of the leader (of joints both arms
+        have), given each read of the leader: it is recorded with no read of its own (a read
+        that times out counts in its missed). Registers as follower.player. Nothing is sent
+        until the first step()."""
     def step(self) -> bool:
         """From the loop: take the leader's reply if it has come, ask again, and send the
         follower its targets once its wire is free. The first step lets the leader's joints go

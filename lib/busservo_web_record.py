@@ -5,12 +5,15 @@
 #   asyncio.run(busservo_web.serve(robot, "a password of yours", leader=robot2))
 #
 #   POST /api/record {"on": true}    every joint goes limp: move the arm by hand, each read of
-#                                    the positions is kept (busservo_record's Recorder)
-#   POST /api/record {"on": false}   stop: the recording ends and is kept, or the replay ends
+#                                    the positions is kept (busservo_record's Recorder); with
+#                                    the teleop on, the leader is recorded, from its reads
+#   POST /api/record {"on": false}   stop: the recording ends and is kept (the teleop goes
+#                                    on), or the replay ends
 #   POST /api/replay {"speed"}       play the recording (speed 0.25..2, default 1): into its
 #                                    first pose at DPS degrees/s, then at its recorded pace
 #   POST /api/teleop {"on"}          the leader arm, limp, drives the robot (serve()'s leader)
-# and in the state: "rec" {"recording", "s", "samples", "missed", "playing", "speed"} and
+# and in the state: "rec" {"recording", "leader" (the recording is the leader's), "s",
+# "samples", "missed", "playing", "speed"} and
 # "teleop": None without a leader, else {"on", "hz" (the leader's reads a second), "engaged",
 # "held" (a joint that does not answer), "warning"}.
 #
@@ -22,8 +25,9 @@
 # The recording reads the positions itself, through the driver's ask() a step each turn of
 # the panel's loop; meanwhile the loop asks for none of its own (panel.read_ms None), so that
 # no two reads cut into each other on the bus. So does teleoperation (the leader's reads may
-# share the bus). The recording goes to FILE as it comes, a piece at a time, and stops by
-# itself after MAX_S seconds.
+# share the bus); a recording made while it is on is of the leader, each of the teleop's reads
+# given to it (busservo_teleop's recorder), so the leader is read once for both. The recording
+# goes to FILE as it comes, a piece at a time, and stops by itself after MAX_S seconds.
 # (busservo_web's header says what a part is, and what it may use of the core.)
 import time
 
@@ -82,8 +86,6 @@ class Record:
     def stop(self):
         """End what runs: the recording (kept; the joints stay limp), the replay (the move on
         its way is made) or the teleop (the leader stays limp)."""
-        recorder = self.recorder
-        self.recorder = None
         if self.player:
             self.player.stop()
             self.player = None
@@ -91,6 +93,14 @@ class Record:
             self.teleop.stop()
             self.teleop = None
         self._free()
+        self._keep()
+
+    def _keep(self):
+        # End the recording under way, if any, and keep it (a teleop on goes on).
+        recorder = self.recorder
+        self.recorder = None
+        if self.teleop:
+            self.teleop.recorder = None
         if recorder:
             try:
                 recording = recorder.stop()
@@ -115,6 +125,7 @@ class Record:
             samples, missed = len(recording) if recording else 0, 0
         out["rec"] = {
             "recording": recorder is not None,
+            "leader": recorder is not None and recorder.robot is self.leader,
             "s": round(ms / 1000, 1),
             "samples": samples,
             "missed": missed,
@@ -135,20 +146,23 @@ class Record:
 
     def tick(self, read):
         try:
-            if self.recorder:
+            if self.teleop:
+                if self.teleop.done:  # the robot's estop(), or another player
+                    self.stop()
+                else:
+                    self.teleop.step()  # and gives the recorder its reads, if one is on
+            elif self.recorder:
                 self.recorder.step()
-                if time.ticks_diff(time.ticks_ms(), self._started) >= MAX_S * 1000:
-                    self.stop()  # long enough: kept
             elif self.player:
                 if self.player.done:
                     self.stop()
                 else:
                     self.player.step()
-            elif self.teleop:
-                if self.teleop.done:  # the robot's estop(), or another player
-                    self.stop()
+            if self.recorder and time.ticks_diff(time.ticks_ms(), self._started) >= MAX_S * 1000:
+                if self.teleop:
+                    self._keep()  # long enough: kept, and the teleop goes on
                 else:
-                    self.teleop.step()
+                    self.stop()  # long enough: kept
         except Exception as e:  # the controller, the file: shown, and ended
             self.panel.failed(e)
             self.stop()
@@ -164,9 +178,20 @@ class Record:
     async def post_record(self, body, token):
         panel = self.panel
         if not web.need(body, "on", bool):
-            self.stop()
+            if self.teleop:
+                self._keep()  # the recording of the leader ends, the teleop goes on
+            else:
+                self.stop()
             return panel.state(token)
         panel.driving(token, self)  # armed, and no sequence playing
+        if self.teleop and not self.recorder:  # the leader, from the teleop's reads
+            try:
+                recorder = br.Recorder(self.leader, self.teleop.names, FILE, limp=False)
+            except OSError as e:
+                raise web.Refused(500, "could not record to %s: %r" % (FILE, e))
+            self.teleop.recorder = self.recorder = recorder
+            self._started = time.ticks_ms()
+            return panel.state(token)
         self._idle()
         panel.order(self)  # the stream, a jog end
         panel.to = {}

@@ -1113,7 +1113,15 @@ class Teleop(Browsing):
         turn((11, position(20)))  # the leader's base, by hand
         self.assertIsNotNone(until(lambda: self.reached(1, 20), 8.0), controller())
         self.assertIsNotNone(until(lambda: "reads/s" in self.text("hz")), self.text("hz"))
-        self.assertFalse(b.find_element(By.ID, "record").is_enabled())  # it holds the joints
+        self.assertFalse(b.find_element(By.ID, "replay").is_enabled())  # it holds the joints
+        self.press("record")  # records the leader, from the teleop's reads
+        self.assertIsNotNone(
+            until(lambda: "Recording the leader" in self.text("rec")), self.text("rec")
+        )
+        self.assertTrue(panel_state()["teleop"]["on"])
+        self.press("recstop")
+        self.assertIsNotNone(until(lambda: "Recorded" in self.text("rec")), self.text("rec"))
+        self.assertTrue(panel_state()["teleop"]["on"])  # the teleop goes on
         b.find_element(By.ID, "teleop").click()  # off
         self.assertIsNotNone(until(lambda: not panel_state()["teleop"]["on"]), panel_state())
         self.assertFalse(b.find_element(By.ID, "teleop").is_selected())

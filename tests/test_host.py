@@ -1246,6 +1246,10 @@ class RecordPlayTeleop(Scratch):
             (("play", "--sim", "line3.jsonl"), "line3.jsonl, line 3: a sample must be"),
             (("play", "--sim", "good.jsonl", "--seconds", 1), "play takes no --seconds"),
             (("teleop", "--sim"), "teleop wants --leader-calibration F1 and"),
+            (("teleop", "--sim") + calibrations + ("--record",), "--record wants a value"),
+            (("teleop", "--sim") + calibrations + ("--record", "no/such/l.rec"), "no folder no/"),
+            (("teleop", "--sim") + calibrations + ("--record", "folder"), "folder is a folder"),
+            (("record", "--sim", "a.rec", "--record", "b.rec"), "record takes no --record"),
             (("teleop", "--sim", "--leader-calibration", leader), "--follower-calibration F2"),
             (("teleop", "--sim", "--sim", "--sim") + calibrations, "teleop wants LEADER [FOL"),
             (
@@ -1347,6 +1351,32 @@ class RecordPlayTeleop(Scratch):
             self.assertIn("stopped: the follower holds at {4: ", out)
             self.assertIn("the leader is limp", out)
             self.assertNotIn("Traceback", err)
+
+    def test_teleop_record_keeps_each_read_of_the_leader(self):
+        # Two ports and one bus: the leader's reads go into FILE as they drive the follower.
+        import busservo_record
+
+        leader, follower = write_calibrations(self.scratch)
+        calibrations = ("--leader-calibration", leader, "--follower-calibration", follower)
+        for ports, name in ((("--sim", "--sim"), "lead.jsonl"), (("--sim",), "lead.rec")):
+            teleop = command_process(
+                "teleop", *ports + calibrations + ("--record", name), cwd=self.scratch
+            )
+            said = read_until(teleop, "cycles a second")
+            said += read_until(teleop, "cycles a second")
+            status, out, err = ctrl_c(teleop)
+            self.assertEqual(status, 130, said + out + err)
+            self.assertIn("recording the leader into %s" % name, said)
+            self.assertNotIn("Traceback", err)
+            recording = busservo_record.Recording.load(name)
+            self.assertEqual(recording.names, ["base", "shoulder", "elbow"])
+            self.assertEqual([recording.joints[n].servo_id for n in recording.names], [1, 2, 3])
+            self.assertGreater(len(recording), 10)  # ~26..28 a second for over a second
+            self.assertIn(
+                "saved %s: %d samples over %.1f s, "
+                % (name, len(recording), recording.duration_ms / 1000),
+                out,
+            )
 
     def test_teleop_names_a_joint_that_does_not_answer(self):
         # The leader's servo 2 (its shoulder) does not answer: the follower holds, and the

@@ -4,17 +4,20 @@
 # bus. The driver, the motion layer and the teleop all run on the world's clock.
 import asyncio
 import math
+import os
 import time
 import unittest
 
 import busservo
 import busservo_motion as bm
+import busservo_record as br
 import busservo_teleop as bt
 import wire
 from busservo import CMD_MULT_SERVO_POS_READ as READ
 from busservo import CMD_MULT_SERVO_UNLOAD as UNLOAD
 from busservo import CMD_SERVO_MOVE as MOVE
 from fakeuart import FakeUART
+from shell import scratch
 from test_alloc import heap_per_call
 
 NAMES = ("base", "shoulder", "elbow", "wrist", "roll", "gripper")
@@ -24,7 +27,7 @@ LIMITS = {"two": 1000 / ((11 + 23) * BYTE_MS), "one": 1000 / ((11 + 25) * BYTE_M
 
 
 def clocked(clock):
-    busservo.time = bm.time = bt.time = clock
+    busservo.time = bm.time = bt.time = br.time = clock
 
 
 def arm(bus, first=1, **per_joint):
@@ -101,8 +104,10 @@ def raises(call, error, *words):
 
 class Tidy(unittest.TestCase):
     def tearDown(self):
-        busservo.time = bm.time = bt.time = time
+        busservo.time = bm.time = bt.time = br.time = time
         bm._asyncio = None
+        if "open" in br.__dict__:
+            del br.open
 
 
 class Following(Tidy):
@@ -420,6 +425,212 @@ class Safety(Tidy):
         self.assertTrue(t.moves > 60, t.moves)
 
 
+PER_DEGREE = 25 / 6  # a bus servo's positions per degree
+
+
+def session(t, rec, worlds, ms, hand, step_us=500):
+    """run() a teleop t that feeds the recorder rec, hand(ms) giving the leader's servos from
+    the session's start: the ticks_ms of the first sample kept (None: none kept)."""
+    clock = worlds[0].clock
+    start = clock.now_us
+    first = None
+    while clock.now_us - start < ms * 1000:
+        for servo_id, position in hand((clock.now_us - start) // 1000).items():
+            worlds[0].sim.turn(servo_id, position)
+        t.step()
+        if first is None and rec.samples:
+            first = t.read_at
+        clock.advance_us(step_us)
+    return first
+
+
+def flash(w, writes):
+    """open() on a board's flash, for a Recorder: each write stalls the board 50 ms (a sector's
+    erase), and notes (bytes that reached w's board pin meanwhile, bytes written)."""
+
+    class Flash:
+        def __init__(self, path, mode):
+            pass
+
+        def write(self, b):
+            came = w.arrived_total
+            w.clock.advance_ms(50)
+            writes.append((w.arrived_total - came, len(b)))
+            return len(b)
+
+        def close(self):
+            pass
+
+    return Flash
+
+
+class Recorded(Tidy):
+    # Recording while teleoperating: the Recorder takes each read of the leader the Teleop
+    # made (Teleop(..., recorder=rec)), so the leader is read once a cycle, not twice.
+
+    def test_a_teleop_session_recorded_plays_back_to_the_leaders_path(self):
+        for port, where in (("rp2", "two"), ("esp32", "two"), ("rp2", "one")):
+            if where == "two":
+                wl, wf, lead, follow = two_uarts(port)
+                worlds = (wl, wf)
+            else:
+                wl, lead, follow = one_bus(port)
+                wf = wl
+                worlds = (wl,)
+            asked = []  # the leader's reads: a request for ids 1..6
+            wl.on_frame = lambda us, f, asked=asked: (
+                f[3] == READ and f[5] == 1 and asked.append(us)
+            )
+            rec = br.Recorder(lead)
+            t = bt.Teleop(lead, follow, dps=60, rest=False, recorder=rec)
+            origin = wl.clock.ticks_ms()
+            first = session(t, rec, worlds, 20000, lambda i: wave(i))
+            self.assertEqual(rec.samples, t.reads)  # every read of the leader kept
+            self.assertEqual((rec.missed, t.timeouts), (0, 0))
+            # Each kept once: the leader was asked for its positions once a cycle.
+            self.assertTrue(abs(len(asked) - t.reads) <= 1, (len(asked), t.reads))
+            recording = rec.stop()
+            self.assertEqual(len(recording), t.reads)
+            self.assertTrue(recording.duration_ms > 19500, recording.duration_ms)
+            # Played back on the follower, its servos go where the hand took the leader's:
+            # each 5 ms, against the hand's path at the recording's time (its samples are
+            # the replies' times, a reply's wire time after the hand was there).
+            t.stop()
+            player = recording.play(follow, dps=60)
+            clock = wl.clock
+            squares = count = 0
+            while not player.done:
+                player.step()
+                clock.advance_ms(1)
+                if player.started is None or clock.ticks_ms() % 5:
+                    continue
+                at = clock.ticks_diff(clock.ticks_ms(), player.started)
+                if at > recording.duration_ms:
+                    continue
+                path = wave(clock.ticks_diff(first, origin) + at)
+                for s in range(1, 7):
+                    got = wf.sim.position(s + (6 if where == "one" else 0))
+                    squares += ((got - path[s]) / PER_DEGREE) ** 2
+                    count += 1
+            rms = math.sqrt(squares / count)
+            self.assertTrue(count > 20000, count)
+            self.assertTrue(rms < 1.5, (port, where, rms))
+
+    def test_a_read_that_times_out_is_skipped_and_counted_not_fatal(self):
+        for port in wire.PORTS:
+            wl, wf, lead, follow = two_uarts(port)
+            rec = br.Recorder(lead)
+            t = bt.Teleop(lead, follow, dps=60, rest=False, recorder=rec)
+            t.warn = lambda text: None  # (a servo silent, below: kept in t.warnings)
+            session(t, rec, (wl, wf), 500, wave)
+            for k in range(12):
+                if k % 3 == 0:
+                    wl.late(300)  # a reply past its timeout
+                elif k % 3 == 1:
+                    wl.sim.silent = True  # no reply at all
+                else:
+                    wl.sim.missing.add(3)  # a servo that does not answer: no sample
+                session(t, rec, (wl, wf), 400, wave)
+                wl.sim.silent = False
+                wl.sim.missing.clear()
+            session(t, rec, (wl, wf), 2000, wave)
+            self.assertTrue(t.timeouts >= 6, t.timeouts)
+            self.assertEqual(rec.samples, t.reads)  # (a reply with a joint silent: neither)
+            self.assertTrue(rec.missed >= t.timeouts + 4, (rec.missed, t.timeouts))
+            recording = rec.stop()
+            self.assertEqual(len(recording), rec.samples)
+            times = [ms for ms, _ in recording.samples()]
+            self.assertTrue(max(b - a for a, b in zip(times, times[1:])) > 150)  # gaps kept
+            self.assertTrue(t.engaged)
+
+    def test_the_file_is_written_only_between_a_reply_and_the_next_request(self):
+        # A write that stalls the board for a sector's erase (50 ms), as in test_record:
+        # no byte may reach the leader's board pin meanwhile, and nothing is lost.
+        for where in ("two", "one"):
+            if where == "two":
+                wl, wf, lead, follow = two_uarts()
+                worlds = (wl, wf)
+            else:
+                wl, lead, follow = one_bus()
+                worlds = (wl,)
+            writes = []
+            br.open = flash(wl, writes)
+            rec = br.Recorder(lead, path="arm.rec")
+            t = bt.Teleop(lead, follow, dps=60, rest=False, recorder=rec)
+            session(t, rec, worlds, 20000, wave)
+            del br.open
+            self.assertEqual((rec.missed, t.timeouts), (0, 0))
+            self.assertEqual((lead.bus.noise, wl.overrun), (0, 0))
+            pieces = writes[2:]  # after the magic and the joints' line
+            self.assertTrue(len(pieces) > 5, writes)
+            self.assertEqual(set(pieces), {(0, br.PIECE)})  # nothing came in during a stall
+            self.assertEqual(rec.samples, t.reads)
+            self.assertTrue(t.reads > 400)
+
+    def test_a_late_reply_is_never_taken_for_the_next_reads(self):
+        # The hand turns the leader's base a position every 25 ms, so a sample's position says
+        # when the controller read it: never before the request the sample was taken for
+        # (the last to reach the controller), though replies come 300 ms late now and then.
+        # (A reader of the driver's request_positions() and poll() alone, with no ask(), takes
+        # the late reply for the next read's, and every read after it is one behind.)
+        for port in wire.PORTS:
+            wl, wf, lead, follow = two_uarts(port)
+            clock = wl.clock
+            start = clock.now_us
+            asked = []  # ms each request of the leader was in at its controller
+            wl.on_frame = lambda us, f, asked=asked: f[3] == READ and asked.append(us)
+            rec = br.Recorder(lead)
+            t = bt.Teleop(lead, follow, dps=60, rest=False, recorder=rec)
+            stale = []
+            take = rec.take
+
+            def taken(ms, positions, take=take, asked=asked, stale=stale, start=start):
+                if positions is not None and positions.get(1) is not None:
+                    want = 100 + (asked[-1] - start) // 25000  # where the hand had it then
+                    if positions[1] < want - 1:
+                        stale.append((positions[1], want))
+                return take(ms, positions)
+
+            rec.take = taken
+            for ms in range(20000):
+                if ms % 1000 == 500:
+                    wl.late(300)
+                wl.sim.turn(1, 100 + (clock.now_us - start) // 25000)
+                t.step()
+                clock.advance_ms(1)
+            self.assertEqual((len(stale), stale[:3]), (0, []))
+            self.assertTrue(t.timeouts >= 15, t.timeouts)
+            self.assertTrue(rec.samples > 300, rec.samples)
+
+    def test_the_recorder_must_record_joints_the_teleop_reads(self):
+        clock = wire.Clock()
+        wl = wire.World("rp2", clock=clock)
+        wf = wire.World("rp2", clock=clock)
+        clocked(clock)
+        lead = arm(busservo.BusServo(wl.uart))
+        follow = bm.Robot(busservo.BusServo(wf.uart), {"base": bm.Joint(1)})
+        raises(
+            lambda: bt.Teleop(lead, follow, recorder=br.Recorder(lead, limp=False)),
+            ValueError,
+            "recorder",
+            "shoulder",
+            "names=['base']",
+        )
+        raises(
+            lambda: bt.Teleop(lead, follow, recorder=br.Recorder(follow, limp=False)),
+            ValueError,
+            "recorder must record the leader",
+        )
+        raises(lambda: bt.Teleop(lead, follow, recorder=5), TypeError, "recorder", "take")
+        self.assertEqual(wf.frames(), [])  # nothing sent
+        rec = br.Recorder(lead, names=["base"], limp=False)
+        t = bt.Teleop(lead, follow, rest=False, recorder=rec)
+        session(t, rec, (wl, wf), 1000, lambda i: {1: 520})
+        self.assertTrue(rec.samples > 20)
+        self.assertEqual(rec.step(), False)  # it takes the teleop's reads: none of its own
+        self.assertEqual(list(rec.stop())[-1][1], {"base": lead.joints["base"].degrees(520)})
+
+
 def positions_reply(ids, position):
     """The controller's reply to a positions request: each of ids at position."""
     frame = bytearray((0x55, 0x55, 3 * len(ids) + 3, READ, len(ids)))
@@ -469,6 +680,27 @@ class Budget(Tidy):
         self.assertEqual(t.moves, moves + 21)  # (one step to warm up, then 20)
         self.assertEqual(heap_per_call(t.step), 0)  # waiting for the reply
         self.assertEqual(t.moves, moves + 21)
+        # Recording the leader too: its take() allocates nothing, nor does the file's write of
+        # a piece (one comes within the 20 steps measured, after 30 to warm up).
+        path = scratch("teleop-budget") + ".rec"
+        try:
+            rec = br.Recorder(lead, path=path, limp=False)
+            t = bt.Teleop(lead, follow, rest=False, recorder=rec)
+            t.step()
+            clock.advance_ms(40)
+            fu.feed(positions_reply(range(1, 7), 500))
+            t.step()
+            for _ in range(30):
+                reply()
+                t.step()
+            self.assertTrue(t.engaged)
+            written = os.stat(path)[6]
+            self.assertEqual(heap_per_call(t.step, reply), ask)
+            self.assertTrue(os.stat(path)[6] >= written + br.PIECE)
+            self.assertEqual(rec.samples, t.reads)
+            rec.stop()
+        finally:
+            os.remove(path)
 
 
 if __name__ == "__main__":

@@ -2455,7 +2455,7 @@ class Recording(Tidy):
             reply = await state(port, token)
             self.assertTrue(reply["teleop"]["hz"] > 5, reply)  # its live rate
             self.assertTrue(reply["teleop"]["engaged"], reply)
-            status, reply = await http(port, "POST", "/api/record", {"on": True}, token)
+            status, reply = await http(port, "POST", "/api/replay", {}, token)
             self.assertEqual(status, 409)
             self.assertIn("teleop is on", reply["error"])
             status, reply = await http(port, "POST", "/api/teleop", {"on": False}, token)
@@ -2471,5 +2471,70 @@ class Recording(Tidy):
             status, reply = await http(port, "POST", "/api/estop", {}, token)
             self.assertEqual(reply["teleop"]["on"], False)  # STOP ends it
             self.assertTrue(await until(lambda: {1, 2, 3, 4} <= world.sim.limp))
+
+        recorded(scenario, leader=True)
+
+    def test_recording_while_the_teleop_is_on_records_the_leader(self):
+        async def scenario(port, world, robot):
+            panel = _panels[-1]
+            leader = recording_part(panel).leader
+            asked = []  # when the leader's positions were asked for (servos 11..14)
+            seen = world.on_frame
+
+            def frame(us, f):
+                if f[3] == busservo.CMD_MULT_SERVO_POS_READ and f[5] == 11:
+                    asked.append(us)
+                if seen:
+                    seen(us, f)
+
+            world.on_frame = frame
+
+            async def followed(position):  # the page open meanwhile (else the dead-man)
+                for _ in range(30):
+                    if abs(world.sim.position(1) - position) <= 2:
+                        return True
+                    await polled(port, token, 200)
+                return False
+
+            token = await armed(port)
+            await http(port, "POST", "/api/teleop", {"on": True}, token)
+            self.assertTrue(await until(lambda: {11, 12, 13, 14} <= world.sim.limp))
+            world.sim.turn(11, 600)
+            self.assertTrue(await followed(600))
+            status, reply = await http(port, "POST", "/api/record", {"on": True}, token)
+            self.assertEqual(status, 200, reply)
+            self.assertEqual((reply["rec"]["recording"], reply["rec"]["leader"]), (True, True))
+            self.assertTrue(reply["teleop"]["on"])
+            begun = len(asked)
+            for k in range(11):  # the leader's base by hand, 600 to 700 over half a second
+                world.sim.turn(11, 600 + 10 * k)
+                await http(port, "GET", "/api/state", token=token)
+                await asyncio.sleep_ms(50)
+            await polled(port, token, 400)
+            self.assertTrue(abs(world.sim.position(1) - 700) <= 2)  # it followed meanwhile
+            self.assertFalse(1 in world.sim.limp)
+            status, reply = await http(port, "POST", "/api/record", {"on": False}, token)
+            reads = len(asked) - begun
+            self.assertEqual(status, 200, reply)
+            rec = reply["rec"]
+            self.assertEqual((rec["recording"], reply["teleop"]["on"]), (False, True))
+            # Every read of the leader kept, and no read of its own: one a cycle, for both.
+            self.assertTrue(rec["samples"] > 10, rec)
+            self.assertTrue(abs(rec["samples"] - reads) <= 2, (rec, reads))
+            recording = recording_part(panel).recording
+            self.assertEqual(recording.names, ["base", "shoulder", "elbow", "claw"])
+            self.assertEqual(recording.joints["base"].servo_id, 11)
+            last = list(recording)[-1][1]
+            self.assertAlmostEqual(last["base"], leader.joints["base"].degrees(700), 0)
+            self.assertTrue(os.stat(busservo_web_record.FILE)[6] > 0)  # on the board's flash
+            world.sim.turn(11, 500)  # the teleop goes on
+            self.assertTrue(await followed(500))
+            # Recorded again, the teleop turned off ends the recording too, and keeps it.
+            await http(port, "POST", "/api/record", {"on": True}, token)
+            await polled(port, token, 400)
+            status, reply = await http(port, "POST", "/api/teleop", {"on": False}, token)
+            self.assertEqual((reply["rec"]["recording"], reply["teleop"]["on"]), (False, False))
+            self.assertTrue(reply["rec"]["samples"] > 3, reply)
+            self.assertIsNone(panel.busy)
 
         recorded(scenario, leader=True)
