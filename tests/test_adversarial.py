@@ -5,8 +5,9 @@
 # failed on the driver as reviewed (lib/busservo.py at a34e7c4), each fixed since.
 #
 # Most run in tests/wire.py's world (a clock the test steps, the wire at 10 bits a byte, the
-# simulated controller at its far end), on every port model; the fast peers also on real
-# time (tests/fakeuart.py, busservo_sim with no line).
+# simulated controller at its far end), on every port model; the fast peers also as a user
+# has them (tests/fakeuart.py, busservo_sim with no line), on a simulated clock too: on real
+# time a loaded machine's pauses are busy moments no test asked for.
 import asyncio
 import errno
 import time
@@ -15,6 +16,7 @@ import unittest
 import busservo
 import busservo_async
 import busservo_sim
+import fakeuart
 import wire
 from busservo import CMD_GET_BATTERY_VOLTAGE
 from fakeuart import FakeUART
@@ -330,7 +332,7 @@ class Early(unittest.TestCase):
 class FastPeers(unittest.TestCase):
     # Guarantee 2: a peer faster than the wire always gets its answers.
     def tearDown(self):
-        busservo.time = busservo_async.time = time
+        busservo.time = busservo_async.time = fakeuart.time = time
         busservo_async.asyncio = asyncio
 
     def async_world(self, port):
@@ -454,11 +456,16 @@ class FastPeers(unittest.TestCase):
                     self.assertEqual(ask(w, bus, "positions", n), n, why)
 
     def test_fake_uarts_and_the_simulator_answer_every_query_after_missed_ones(self):
-        # (holds) On real time: FakeUART(at_once=True) as it is, handing out 1 byte a
-        # readinto() (chunks=[1]), answering 3 ms after the write (sooner than the wire's
-        # 12.5 ms round trip); SimController(baudrate=None); and a user's own fake. Each
-        # misses two queries (no reply), then answers: every query after is answered, with
-        # requests through poll() between them.
+        # (holds) FakeUART(at_once=True) as it is, handing out 1 byte a readinto()
+        # (chunks=[1]), answering 3 ms after the write (sooner than the wire's 12.5 ms round
+        # trip); SimController(baudrate=None); and a user's own fake. Each misses two
+        # queries (no reply), then answers: every query after is answered, with requests
+        # through poll() between them. On a simulated clock (the fake's and the driver's): on
+        # real time a loaded machine may read a reply late, and then one query may time out
+        # (test_a_fast_peers_reply_read_late_once_does_not_stop_every_later_answer).
+        clock = wire.Clock(cost_us=20)
+        busservo.time = fakeuart.time = clock
+
         def fake(delay_ms=0, **kw):
             uart = FakeUART(**kw)
 
@@ -513,9 +520,9 @@ class FastPeers(unittest.TestCase):
             for _ in range(4):
                 self.assertEqual(bus.read_battery(timeout_ms=20), 7500, name)
                 bus.request_battery()
-                start = time.ticks_ms()
+                start = clock.ticks_ms()
                 got = None
-                while got is None and time.ticks_diff(time.ticks_ms(), start) < 1000:
+                while got is None and clock.ticks_diff(clock.ticks_ms(), start) < 1000:
                     got = bus.poll()
                 self.assertEqual(got, CMD_GET_BATTERY_VOLTAGE, name)
 
@@ -524,13 +531,18 @@ class FastPeers(unittest.TestCase):
         # queries missed, and then the program is busy for 15 ms just after one request
         # leaves: its reply, read late, looked as slow as the wire, and the driver took the
         # peer for one; after a request through poll() every later query timed out, for good
-        # (found under load: a fresh clone's run beside another). Now one does, at most.
+        # (found under load: a fresh clone's run beside another). Now one does, at most. On
+        # a simulated clock (the fake's and the driver's), so that only the busy moment the
+        # test makes happens: a loaded machine's own made the real-time version miss more.
+        clock = wire.Clock(cost_us=20)
+        busservo.time = fakeuart.time = clock
+
         class Busy(FakeUART):
             busy_ms = 0
 
             def write(self, buf, off=None, n=None):
                 took = FakeUART.write(self, buf, off, n)
-                time.sleep_ms(self.busy_ms)
+                clock.sleep_ms(self.busy_ms)
                 self.busy_ms = 0
                 return took
 
@@ -542,18 +554,18 @@ class FastPeers(unittest.TestCase):
         uart.busy_ms = 15
         self.assertEqual(bus.read_battery(timeout_ms=20), 7500)
         bus.request_battery()
-        start = time.ticks_ms()
+        start = clock.ticks_ms()
         got = None
-        while got is None and time.ticks_diff(time.ticks_ms(), start) < 1000:
+        while got is None and clock.ticks_diff(clock.ticks_ms(), start) < 1000:
             got = bus.poll()
         self.assertEqual(got, CMD_GET_BATTERY_VOLTAGE)
-        answered = 0  # (at most one times out; on a loaded machine other busy moments may
-        for _ in range(6):  # cost more, as the first did: none answered is what it was)
+        answered = 0
+        for _ in range(6):
             try:
                 answered += bus.read_battery(timeout_ms=20) == 7500
             except OSError:
                 pass
-        self.assertTrue(answered >= 1, answered)
+        self.assertTrue(answered >= 5, answered)  # one timed out at most
 
 
 class PositionsAndPoll(unittest.TestCase):
