@@ -216,13 +216,11 @@ class Arm:
                     self._why = (-1, d, abs(u - f) - d, abs(u - f))
                 return False
             c = 1.0 if c > 1 else -1.0
-        # The elbow's angle e has cos(e) = c, and sin(e) = sqrt(1 - c * c) elbow up.
+        # The elbow's angle e has cos(e) = c, elbow up 0..180 degrees.
         e = _acos(c)
-        sin_e = _sqrt(1 - c * c)
         if not self.elbow_up:
             e = -e
-            sin_e = -sin_e
-        s = (_atan2(wr, wz) - _atan2(f * sin_e, self._u + f * c)) * _DEG
+        s = (_atan2(wr, wz) - _atan2(f * _sin(e), self._u + f * c)) * _DEG
         if s > 180:  # the difference of two angles in -180..180: one turn at most
             s -= 360
         elif s <= -180:
@@ -432,7 +430,7 @@ class Arm:
         robot = self.robot
         if robot.player:
             robot.player.stop()
-        took = robot.move(pose, ms=ms)
+        took = robot.move(pose, ms)
         at = self._at
         if at is None:
             self._at = at = [0.0] * 4
