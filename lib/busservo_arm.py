@@ -416,10 +416,10 @@ class Arm:
         if ms is _SOLVE:
             return None
         pose = self._target
-        pose["base"] = self._a
-        pose["shoulder"] = self._s
-        pose["elbow"] = self._e
-        pose["wrist"] = self._w
+        pose["base"] = base
+        pose["shoulder"] = s = self._s
+        pose["elbow"] = e = self._e
+        pose["wrist"] = w = self._w
         if mm_s is not None:
             ms = math.ceil(self._distance(pose) * 1000 / mm_s - 1e-6)  # (float error)
             if ms > _MS_MAX:
@@ -434,10 +434,10 @@ class Arm:
         at = self._at
         if at is None:
             self._at = at = [0.0] * 4
-        at[0] = pose["base"]
-        at[1] = pose["shoulder"]
-        at[2] = pose["elbow"]
-        at[3] = pose["wrist"]
+        at[0] = base
+        at[1] = s
+        at[2] = e
+        at[3] = w
         return took
 
     def _known(self):

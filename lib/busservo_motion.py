@@ -341,37 +341,39 @@ class Robot:
             sends = [None] * k
         k = 0
         capped = dps  # a speed to keep: the call's, or a joint's own
-        for name in targets:
-            i = index.get(name)
-            if i is None:
-                self._i(name)  # raises, naming the joints
-            degrees = targets[name]
-            joint = joints[i]
-            pair = pairs[i]
-            t = _type(degrees)
-            # A float within the limits is finite: its position at once; else, if a number,
-            # a position clamped to the limits.
-            if t is _float and joint.lo <= degrees <= joint.hi:
-                pair[1] = joint._float(degrees)
-            else:
-                if t is not _int and (t is not _float or not _NINF < degrees < _INF):
-                    number("targets[%r]" % name, degrees)  # raises, naming it
-                if not joint.lo <= degrees <= joint.hi:
-                    clamped += 1
-                pair[1] = joint.position(degrees)
-            sends[k] = pair
-            sel[k] = i
-            k += 1
-            if joint.dps:
-                capped = True
+        name = None
+        try:
+            for name in targets:
+                i = index[name]
+                degrees = targets[name]
+                joint = joints[i]
+                pair = pairs[i]
+                t = _type(degrees)
+                # A float within the limits is finite: its position at once; else, if a
+                # number, a position clamped to the limits.
+                if t is _float and joint.lo <= degrees <= joint.hi:
+                    pair[1] = joint._float(degrees)
+                else:
+                    if t is not _int and (t is not _float or not _NINF < degrees < _INF):
+                        number("targets[%r]" % name, degrees)  # raises, naming it
+                    if not joint.lo <= degrees <= joint.hi:
+                        clamped += 1
+                    pair[1] = joint.position(degrees)
+                sends[k] = pair
+                sel[k] = i
+                k += 1
+                if joint.dps:
+                    capped = True
+        except KeyError:
+            self._i(name)  # raises, naming the joints
         if ms is _CHECK:
             return 0
         if made:
             self._sends[k] = sends
         at = self._at
         took = ms or 0
-        slowed = 0
         if capped:
+            slowed = 0
             unknown = None
             for j in range(k):
                 i = sel[j]
@@ -400,13 +402,14 @@ class Robot:
                     "the move would take %d ms, more than %d: move in steps, or faster"
                     % (took, _MS_MAX)
                 )
+            self.slowed += slowed
         if self._live or self._fresh:
             self.hold()  # (the pairs are the stream's: it ends)
         self.bus.move_many(sends, took)
         for j in range(k):
             at[sel[j]] = sends[j][1]
-        self.clamped += clamped
-        self.slowed += slowed
+        if clamped:
+            self.clamped += clamped
         return took
 
     def where(self, names=None, positions=None):
