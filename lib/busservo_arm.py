@@ -480,6 +480,8 @@ class Arm:
                     at[3] = w
             except BaseException as err:  # (Ctrl-C too: move_to() raises it)
                 self._err = err
+                if _awaitable:  # CPython: whoever catches it may clear its frames (as
+                    self._moves = self._mover()  # unittest does), and so end this one
             yield took
 
     def _known(self):
@@ -649,6 +651,8 @@ class Line:
                         sent = True
             except BaseException as err:  # (Ctrl-C too: step() raises it)
                 self._err = err
+                if _awaitable:  # CPython: as in Arm._mover()
+                    self._steps = self._stepper()
             yield sent
 
     def stop(self):
