@@ -523,8 +523,10 @@ class Robot:
         if self._slowing and time.ticks_diff(now, self._sent) < self._ms:
             return False  # a slowed joint is on its way: its next step once it is there
         live = self._live
-        frame = self.frame_ms or 3 * len(live) + 8  # ms: at 9600 baud, until measured
-        ahead = self.bus.wire_ms()
+        n = len(live)
+        frame = self.frame_ms or 3 * n + 8  # ms: at 9600 baud, until measured
+        bus = self.bus
+        ahead = bus.wire_ms()
         if ahead > (since if since < frame else frame):
             return False
         # Interpolate over the time to the next update: the pace of stream(),
@@ -543,23 +545,26 @@ class Robot:
         # frame goes before the servo is there (above). So a joint never turns faster than
         # its dps, however fast step() runs and however fast the targets come. A glide grows
         # by the loop's lateness, up to 10 loop periods: a new target is heard within them,
-        # and the joint goes at 10/11 of its dps at the least.
-        elapsed = time.ticks_diff(now, self._sent)
-        cap = self._ms + since
-        if cap > 10 * since:
-            cap = 10 * since
-        if cap < ms:
-            cap = ms
-        if elapsed > cap:
-            elapsed = cap
+        # and the joint goes at 10/11 of its dps at the least. (Worked out at the first such
+        # joint: elapsed is -1 until then.)
+        elapsed = -1
         glide = ms
         fresh = False
         live_i = self._live_i
-        for k in range(len(live)):
+        for k in range(n):
             i = live_i[k]
             position = goal[i]
             pps = joints[i]._pps
             if pps:  # no faster than the joint's dps: step towards the goal
+                if elapsed < 0:
+                    elapsed = time.ticks_diff(now, self._sent)
+                    cap = self._ms + since
+                    if cap > 10 * since:
+                        cap = 10 * since
+                    if cap < ms:
+                        cap = ms
+                    if elapsed > cap:
+                        elapsed = cap
                 owed[i] += pps * elapsed
                 most = owed[i] // 1000
                 if position > at[i] + most:
@@ -575,20 +580,20 @@ class Robot:
                 if need > glide:
                     glide = need
             live[k][1] = position
-        self.bus.move_many(live, glide)
+        bus.move_many(live, glide)
         self._sent = now
         self._ms = glide
         self._slowing = fresh or glide > ms  # still on its way: the next frame waits
-        for k in range(len(live)):
+        for k in range(n):
             at[live_i[k]] = live[k][1]
         if fresh:
             self.slowed += 1
         self._fresh = fresh
         self.updates += 1
         # The frame's time on the wire, as wire_ms() grew (whole ms: the most seen).
-        sent = self.bus.wire_ms() - ahead
-        if len(live) != self._frame_n:
-            self._frame_n = len(live)
+        sent = bus.wire_ms() - ahead
+        if n != self._frame_n:
+            self._frame_n = n
             self.frame_ms = 0
         if sent > self.frame_ms:
             self.frame_ms = sent
