@@ -391,7 +391,10 @@ class Arm:
         # move_to()'s work, a call a turn: the move's ms (None for pose(), ms _SOLVE: the
         # solve alone, the angles in self._a, the base, _s, _e and _w, nothing sent), or
         # None and what it raised in self._err. The checks are inline (a call costs more
-        # than the check): _number() only to say what is wrong.
+        # than the check): _number() only to say what is wrong. The module's names it uses
+        # are its locals, looked up once (the generator keeps them).
+        solve, typ, int_, float_, ninf, inf = _SOLVE, _type, _int, _float, _NINF, _INF
+        ms_max, atan2, sqrt, deg = _MS_MAX, _atan2, _sqrt, _DEG
         while True:
             took = None
             try:
@@ -401,42 +404,40 @@ class Arm:
                 pitch = self._in_pitch
                 ms = self._in_ms
                 mm_s = self._in_mm_s
-                if ms is not _SOLVE:
+                if ms is not solve:
                     if (ms is None) == (mm_s is None):
                         raise ValueError(
                             "give move_to() ms or mm_s (not both), got ms=%r mm_s=%r" % (ms, mm_s)
                         )
                     if ms is not None:
-                        if _type(ms) is not _int:
-                            raise TypeError(
-                                "ms must be an int in 0..%d ms, got %r" % (_MS_MAX, ms)
-                            )
-                        if not 0 <= ms <= _MS_MAX:
-                            raise ValueError("ms must be in 0..%d ms, got %r" % (_MS_MAX, ms))
+                        if typ(ms) is not int_:
+                            raise TypeError("ms must be an int in 0..%d ms, got %r" % (ms_max, ms))
+                        if not 0 <= ms <= ms_max:
+                            raise ValueError("ms must be in 0..%d ms, got %r" % (ms_max, ms))
                     else:
                         _number("mm_s", mm_s, 0)
                         if not mm_s:
                             raise ValueError("mm_s must be more than 0 mm/s, got %r" % (mm_s,))
-                t = _type(x)
-                if t is not _int and (t is not _float or not _NINF < x < _INF):
+                t = typ(x)
+                if t is not int_ and (t is not float_ or not ninf < x < inf):
                     _number("x", x)
-                t = _type(y)
-                if t is not _int and (t is not _float or not _NINF < y < _INF):
+                t = typ(y)
+                if t is not int_ and (t is not float_ or not ninf < y < inf):
                     _number("y", y)
-                t = _type(z)
-                if t is not _int and (t is not _float or not _NINF < z < _INF):
+                t = typ(z)
+                if t is not int_ and (t is not float_ or not ninf < z < inf):
                     _number("z", z)
-                t = _type(pitch)
+                t = typ(pitch)
                 if (
                     pitch is not None
-                    and t is not _int
-                    and (t is not _float or not _NINF < pitch < _INF)
+                    and t is not int_
+                    and (t is not float_ or not ninf < pitch < inf)
                 ):
                     _number("pitch", pitch)
                 # The base's angle towards x, y (checked), or where it is if x, y is on its
                 # axis.
                 if x or y:
-                    base = _atan2(y, x) * _DEG
+                    base = atan2(y, x) * deg
                 else:
                     base = self._at[0] if self._at else 0.0
                 joint = self._joints[0]
@@ -445,7 +446,7 @@ class Arm:
                         "(x, y, z) = (%.1f, %.1f, %.1f) mm: the base would be at %.1f degrees,"
                         " beyond its limits %.1f..%.1f" % (x, y, z, base, joint.lo, joint.hi)
                     )
-                r = _sqrt(x * x + y * y)
+                r = sqrt(x * x + y * y)
                 zz = z - self._b
                 if pitch is None:
                     pitch = self._pitch(r, zz)
@@ -454,7 +455,7 @@ class Arm:
                 elif not self._plane(r, zz, pitch, True):
                     raise ValueError(self._refusal(x, y, z, pitch))
                 self._a = base
-                if ms is not _SOLVE:
+                if ms is not solve:
                     pose = self._target
                     pose["base"] = base
                     pose["shoulder"] = s = self._s
@@ -462,10 +463,10 @@ class Arm:
                     pose["wrist"] = w = self._w
                     if mm_s is not None:
                         ms = math.ceil(self._distance(pose) * 1000 / mm_s - 1e-6)  # (float error)
-                        if ms > _MS_MAX:
+                        if ms > ms_max:
                             raise ValueError(
                                 "the move would take %d ms, more than %d: move in steps, or"
-                                " faster" % (ms, _MS_MAX)
+                                " faster" % (ms, ms_max)
                             )
                     robot = self.robot
                     if robot.player:
@@ -600,12 +601,14 @@ class Line:
 
     def _stepper(self):
         # step()'s work, a call a turn: True if it sent, or False (and what it raised in
-        # self._err). What does not change along the line is read once.
+        # self._err). What does not change along the line, and the module's names it uses,
+        # are its locals, looked up once.
         robot = self.robot
         arm = self.arm
         pose = arm._pose
         x0, y0, zz0, p0 = self._from
         dx, dy, dz, dp = self._dx, self._dy, self._dz, self._dp
+        atan2, sqrt, deg, late_ms = _atan2, _sqrt, _DEG, _LATE_MS
         while True:
             sent = False
             try:
@@ -622,7 +625,7 @@ class Line:
                         t = frame
                     else:
                         dt = time.ticks_diff(now, self._sent)
-                        t += dt if dt < _LATE_MS else _LATE_MS
+                        t += dt if dt < late_ms else late_ms
                     ms = self.ms
                     u = t / ms if ms and t < ms else 1.0
                     # (Floats are heap objects: no sum where 0 is added.)
@@ -631,8 +634,8 @@ class Line:
                     zz = zz0 + dz * u if dz else zz0
                     pitch = p0 + dp * u if dp else p0
                     if x or y:
-                        pose["base"] = _atan2(y, x) * _DEG
-                    arm._plane(_sqrt(x * x + y * y), zz, pitch, False)
+                        pose["base"] = atan2(y, x) * deg
+                    arm._plane(sqrt(x * x + y * y), zz, pitch, False)
                     pose["shoulder"] = s = arm._s
                     pose["elbow"] = e = arm._e
                     pose["wrist"] = w = arm._w
