@@ -58,6 +58,7 @@ _NINF = float("-inf")
 _type = type
 _int = int
 _float = float
+_next = next
 
 
 def check_links(links):
@@ -120,6 +121,10 @@ class Arm:
         self._why = None
         self._worst = None  # the least bad failure of a scan of pitches, and its pitch
         self._why_pitch = 0
+        # move_to()'s arguments, and what it raised, for _moves.
+        self._in_x = self._in_y = self._in_z = self._in_pitch = self._in_ms = None
+        self._in_mm_s = self._err = None
+        self._moves = self._mover()
 
     # Calibration.
 
@@ -216,13 +221,11 @@ class Arm:
                     self._why = (-1, d, abs(u - f) - d, abs(u - f))
                 return False
             c = 1.0 if c > 1 else -1.0
-        # The elbow's angle e has cos(e) = c, and sin(e) = sqrt(1 - c * c) elbow up.
+        # The elbow's angle e has cos(e) = c, elbow up 0..180 degrees.
         e = _acos(c)
-        sin_e = _sqrt(1 - c * c)
         if not self.elbow_up:
             e = -e
-            sin_e = -sin_e
-        s = (_atan2(wr, wz) - _atan2(f * sin_e, self._u + f * c)) * _DEG
+        s = (_atan2(wr, wz) - _atan2(f * _sin(e), self._u + f * c)) * _DEG
         if s > 180:  # the difference of two angles in -180..180: one turn at most
             s -= 360
         elif s <= -180:
@@ -364,83 +367,123 @@ class Arm:
         pitch nearest -90), in one frame for the four joints: within ms, or at mm_s for the
         tool point and the wrist (from where the arm last went, read first if not known).
         Return the move's ms."""
-        # pose() is this with ms _SOLVE: the solve alone (the angles in self._a, the base, _s,
-        # _e and _w), nothing sent. One function for both, not a helper each calls: on
-        # MicroPython a call of a function with many locals takes a heap block, and a move
-        # with one fewer takes a fifth less time. The checks are inline (a call costs more
-        # than the check): _number() only to say what is wrong.
-        if ms is not _SOLVE:
-            if (ms is None) == (mm_s is None):
-                raise ValueError(
-                    "give move_to() ms or mm_s (not both), got ms=%r mm_s=%r" % (ms, mm_s)
-                )
-            if ms is not None:
-                if _type(ms) is not _int:
-                    raise TypeError("ms must be an int in 0..%d ms, got %r" % (_MS_MAX, ms))
-                if not 0 <= ms <= _MS_MAX:
-                    raise ValueError("ms must be in 0..%d ms, got %r" % (_MS_MAX, ms))
-            else:
-                _number("mm_s", mm_s, 0)
-                if not mm_s:
-                    raise ValueError("mm_s must be more than 0 mm/s, got %r" % (mm_s,))
-        t = _type(x)
-        if t is not _int and (t is not _float or not _NINF < x < _INF):
-            _number("x", x)
-        t = _type(y)
-        if t is not _int and (t is not _float or not _NINF < y < _INF):
-            _number("y", y)
-        t = _type(z)
-        if t is not _int and (t is not _float or not _NINF < z < _INF):
-            _number("z", z)
-        t = _type(pitch)
-        if pitch is not None and t is not _int and (t is not _float or not _NINF < pitch < _INF):
-            _number("pitch", pitch)
-        # The base's angle towards x, y (checked), or where it is if x, y is on its axis.
-        if x or y:
-            base = _atan2(y, x) * _DEG
-        else:
-            base = self._at[0] if self._at else 0.0
-        joint = self._joints[0]
-        if base < joint.lo or base > joint.hi:
-            raise ValueError(
-                "(x, y, z) = (%.1f, %.1f, %.1f) mm: the base would be at %.1f degrees, beyond its"
-                " limits %.1f..%.1f" % (x, y, z, base, joint.lo, joint.hi)
-            )
-        r = _sqrt(x * x + y * y)
-        zz = z - self._b
-        if pitch is None:
-            pitch = self._pitch(r, zz)
-            if pitch is None:
-                raise ValueError(self._refusal(x, y, z, None))
-        elif not self._plane(r, zz, pitch, True):
-            raise ValueError(self._refusal(x, y, z, pitch))
-        self._a = base
-        if ms is _SOLVE:
-            return None
-        pose = self._target
-        pose["base"] = self._a
-        pose["shoulder"] = self._s
-        pose["elbow"] = self._e
-        pose["wrist"] = self._w
-        if mm_s is not None:
-            ms = math.ceil(self._distance(pose) * 1000 / mm_s - 1e-6)  # (float error)
-            if ms > _MS_MAX:
-                raise ValueError(
-                    "the move would take %d ms, more than %d: move in steps, or faster"
-                    % (ms, _MS_MAX)
-                )
-        robot = self.robot
-        if robot.player:
-            robot.player.stop()
-        took = robot.move(pose, ms=ms)
-        at = self._at
-        if at is None:
-            self._at = at = [0.0] * 4
-        at[0] = pose["base"]
-        at[1] = pose["shoulder"]
-        at[2] = pose["elbow"]
-        at[3] = pose["wrist"]
+        # On MicroPython a call of a function whose arguments, locals and stack take more
+        # than 11 words takes a heap block for them, and gives it back at its end: the next
+        # call takes the same block, behind all the floats allocated since, and the first
+        # float after it makes the allocator look through them all (its first fit starts
+        # again at a block given back). On a heap of 200 KB that cost a move more than its
+        # solve. So move_to() only hands its arguments to _moves, a generator made once in
+        # Arm(), whose locals are kept from call to call, and raises what it raised.
+        self._in_x = x
+        self._in_y = y
+        self._in_z = z
+        self._in_pitch = pitch
+        self._in_ms = ms
+        self._in_mm_s = mm_s
+        took = _next(self._moves)
+        e = self._err
+        if e is not None:
+            self._err = None
+            raise e
         return took
+
+    def _mover(self):
+        # move_to()'s work, a call a turn: the move's ms (None for pose(), ms _SOLVE: the
+        # solve alone, the angles in self._a, the base, _s, _e and _w, nothing sent), or
+        # None and what it raised in self._err. The checks are inline (a call costs more
+        # than the check): _number() only to say what is wrong. The module's names it uses
+        # are its locals, looked up once (the generator keeps them).
+        solve, typ, int_, float_, ninf, inf = _SOLVE, _type, _int, _float, _NINF, _INF
+        ms_max, atan2, sqrt, deg = _MS_MAX, _atan2, _sqrt, _DEG
+        while True:
+            took = None
+            try:
+                x = self._in_x
+                y = self._in_y
+                z = self._in_z
+                pitch = self._in_pitch
+                ms = self._in_ms
+                mm_s = self._in_mm_s
+                if ms is not solve:
+                    if (ms is None) == (mm_s is None):
+                        raise ValueError(
+                            "give move_to() ms or mm_s (not both), got ms=%r mm_s=%r" % (ms, mm_s)
+                        )
+                    if ms is not None:
+                        if typ(ms) is not int_:
+                            raise TypeError("ms must be an int in 0..%d ms, got %r" % (ms_max, ms))
+                        if not 0 <= ms <= ms_max:
+                            raise ValueError("ms must be in 0..%d ms, got %r" % (ms_max, ms))
+                    else:
+                        _number("mm_s", mm_s, 0)
+                        if not mm_s:
+                            raise ValueError("mm_s must be more than 0 mm/s, got %r" % (mm_s,))
+                t = typ(x)
+                if t is not int_ and (t is not float_ or not ninf < x < inf):
+                    _number("x", x)
+                t = typ(y)
+                if t is not int_ and (t is not float_ or not ninf < y < inf):
+                    _number("y", y)
+                t = typ(z)
+                if t is not int_ and (t is not float_ or not ninf < z < inf):
+                    _number("z", z)
+                t = typ(pitch)
+                if (
+                    pitch is not None
+                    and t is not int_
+                    and (t is not float_ or not ninf < pitch < inf)
+                ):
+                    _number("pitch", pitch)
+                # The base's angle towards x, y (checked), or where it is if x, y is on its
+                # axis.
+                if x or y:
+                    base = atan2(y, x) * deg
+                else:
+                    base = self._at[0] if self._at else 0.0
+                joint = self._joints[0]
+                if base < joint.lo or base > joint.hi:
+                    raise ValueError(
+                        "(x, y, z) = (%.1f, %.1f, %.1f) mm: the base would be at %.1f degrees,"
+                        " beyond its limits %.1f..%.1f" % (x, y, z, base, joint.lo, joint.hi)
+                    )
+                r = sqrt(x * x + y * y)
+                zz = z - self._b
+                if pitch is None:
+                    pitch = self._pitch(r, zz)
+                    if pitch is None:
+                        raise ValueError(self._refusal(x, y, z, None))
+                elif not self._plane(r, zz, pitch, True):
+                    raise ValueError(self._refusal(x, y, z, pitch))
+                self._a = base
+                if ms is not solve:
+                    pose = self._target
+                    pose["base"] = base
+                    pose["shoulder"] = s = self._s
+                    pose["elbow"] = e = self._e
+                    pose["wrist"] = w = self._w
+                    if mm_s is not None:
+                        ms = math.ceil(self._distance(pose) * 1000 / mm_s - 1e-6)  # (float error)
+                        if ms > ms_max:
+                            raise ValueError(
+                                "the move would take %d ms, more than %d: move in steps, or"
+                                " faster" % (ms, ms_max)
+                            )
+                    robot = self.robot
+                    if robot.player:
+                        robot.player.stop()
+                    took = robot.move(pose, ms)
+                    at = self._at
+                    if at is None:
+                        self._at = at = [0.0] * 4
+                    at[0] = base
+                    at[1] = s
+                    at[2] = e
+                    at[3] = w
+            except BaseException as err:  # (Ctrl-C too: move_to() raises it)
+                self._err = err
+                if _awaitable:  # CPython: whoever catches it may clear its frames (as
+                    self._moves = self._mover()  # unittest does), and so end this one
+            yield took
 
     def _known(self):
         # The joints' degrees last sent or read; read now if none.
@@ -535,6 +578,8 @@ class Line:
         self._sent = 0  # ticks_ms then
         self._stepped = time.ticks_ms()
         arm._pose["base"] = at[0]  # kept while the line runs along the base's axis
+        self._err = None  # what step() raised, for it to raise again
+        self._steps = self._stepper()
         robot = self.robot
         if robot.player:
             robot.player.stop()
@@ -546,53 +591,72 @@ class Line:
         while the wire is busy. True if it sent."""
         if self.done:
             return False
+        # The work is in _steps, a generator made once (Line()), as Arm.move_to()'s is.
+        sent = _next(self._steps)
+        e = self._err
+        if e is not None:
+            self._err = None
+            raise e
+        return sent
+
+    def _stepper(self):
+        # step()'s work, a call a turn: True if it sent, or False (and what it raised in
+        # self._err). What does not change along the line, and the module's names it uses,
+        # are its locals, looked up once.
         robot = self.robot
-        now = time.ticks_ms()
-        since = time.ticks_diff(now, self._stepped)
-        self._stepped = now
-        frame = robot.frame_ms or 20  # a 4-servo frame at 9600 baud, until measured
-        if robot.bus.wire_ms() > (since if since < frame else frame):
-            return False
-        # The line's time: a frame ahead at first, then as the clock goes, but at most
-        # _LATE_MS an update (a late loop slows the line, rather than cutting across).
-        t = self._t
-        if t < 0:
-            t = frame
-        else:
-            dt = time.ticks_diff(now, self._sent)
-            t += dt if dt < _LATE_MS else _LATE_MS
-        u = t / self.ms if self.ms and t < self.ms else 1.0
         arm = self.arm
-        x, y, zz, pitch = self._from  # (floats are heap objects: no sum where 0 is added)
-        if self._dx:
-            x += self._dx * u
-        if self._dy:
-            y += self._dy * u
-        if self._dz:
-            zz += self._dz * u
-        if self._dp:
-            pitch += self._dp * u
         pose = arm._pose
-        if x or y:
-            pose["base"] = _atan2(y, x) * _DEG
-        arm._plane(_sqrt(x * x + y * y), zz, pitch, False)
-        pose["shoulder"] = arm._s
-        pose["elbow"] = arm._e
-        pose["wrist"] = arm._w
-        robot.stream(pose)
-        if not robot.step():
-            return False
-        self._t = t
-        self._sent = now
-        self.updates += 1
-        at = arm._at
-        at[0] = pose["base"]
-        at[1] = arm._s
-        at[2] = arm._e
-        at[3] = arm._w
-        if u >= 1:
-            self._end()
-        return True
+        x0, y0, zz0, p0 = self._from
+        dx, dy, dz, dp = self._dx, self._dy, self._dz, self._dp
+        atan2, sqrt, deg, late_ms = _atan2, _sqrt, _DEG, _LATE_MS
+        while True:
+            sent = False
+            try:
+                now = time.ticks_ms()
+                since = time.ticks_diff(now, self._stepped)
+                self._stepped = now
+                frame = robot.frame_ms or 20  # a 4-servo frame at 9600 baud, until measured
+                if robot.bus.wire_ms() <= (since if since < frame else frame):
+                    # The line's time: a frame ahead at first, then as the clock goes, but at
+                    # most _LATE_MS an update (a late loop slows the line, rather than
+                    # cutting across).
+                    t = self._t
+                    if t < 0:
+                        t = frame
+                    else:
+                        dt = time.ticks_diff(now, self._sent)
+                        t += dt if dt < late_ms else late_ms
+                    ms = self.ms
+                    u = t / ms if ms and t < ms else 1.0
+                    # (Floats are heap objects: no sum where 0 is added.)
+                    x = x0 + dx * u if dx else x0
+                    y = y0 + dy * u if dy else y0
+                    zz = zz0 + dz * u if dz else zz0
+                    pitch = p0 + dp * u if dp else p0
+                    if x or y:
+                        pose["base"] = atan2(y, x) * deg
+                    arm._plane(sqrt(x * x + y * y), zz, pitch, False)
+                    pose["shoulder"] = s = arm._s
+                    pose["elbow"] = e = arm._e
+                    pose["wrist"] = w = arm._w
+                    robot.stream(pose)
+                    if robot.step():
+                        self._t = t
+                        self._sent = now
+                        self.updates += 1
+                        at = arm._at
+                        at[0] = pose["base"]
+                        at[1] = s
+                        at[2] = e
+                        at[3] = w
+                        if u >= 1:
+                            self._end()
+                        sent = True
+            except BaseException as err:  # (Ctrl-C too: step() raises it)
+                self._err = err
+                if _awaitable:  # CPython: as in Arm._mover()
+                    self._steps = self._stepper()
+            yield sent
 
     def stop(self):
         """End the line: the tool point stops at the last point sent. Nothing is sent, and

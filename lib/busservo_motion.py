@@ -22,6 +22,7 @@ import errno
 import json
 import math
 import time
+from array import array
 from struct import pack_into
 
 try:
@@ -50,8 +51,11 @@ _NINF = float("-inf")
 
 CALIBRATION = "robot.json"  # where a calibration is saved: the joints (and an arm's links)
 
+_CHECK = object()  # move(targets, _CHECK): check targets, send nothing (a Player, home())
 _asyncio = None  # imported by the first aio(): many robots never need it
-_bits = bytearray(4)  # a float's bits, for Joint.position()
+# A float's bits, as two 16-bit halves (little-endian: every MicroPython board, and the
+# computers CPython runs the modules on), for Joint.position().
+_bits = array("H", (0, 0))
 _type = type
 _int = int
 _float = float
@@ -150,10 +154,11 @@ class Joint:
         self.dps = dps
         self.per_degree = num / den  # positions per degree
         self.centre = centre
-        # In 1/1024ths of a position: (_c + degrees * _num * 1024 / _den) / 1024.
+        # In 1/1024ths of a position: (_c + degrees * _num * 1024 / _den) / 1024, rounded
+        # down (_c has the half that rounds it).
         self._num = direction * num
         self._den = den
-        self._c = round((centre + trim * self.per_degree) * (1 << _Q))
+        self._c = round((centre + trim * self.per_degree) * (1 << _Q)) + (1 << (_Q - 1))
         # The joint's dps in positions per second (0: none), for the stream.
         self._pps = 0 if dps is None else max(1, int(dps * self.per_degree))
 
@@ -165,21 +170,25 @@ class Joint:
         elif degrees > self.hi:
             degrees = self.hi
         if _type(degrees) is _int:
-            q = (degrees * self._num << _Q) // self._den
-        else:
-            # The same without a float: from the float's sign, exponent e and the
-            # top 22 bits of its significand m (1 <= m / 2**21 < 2), degrees =
-            # m * 2**(e - 148). |degrees| < 512, so the shift is to the right, and
-            # m * num < 2**30 stays a small int on a 32-bit port.
-            b = _bits
-            pack_into("<f", b, 0, degrees)
-            q = b[3]  # the sign, and the exponent's top 7 bits (each byte read once)
-            m = b[2]
-            shift = 148 - _Q - ((q & 0x7F) << 1 | m >> 7)
-            m = ((m | 0x80) << 16 | b[1] << 8 | b[0]) >> 2
-            m = 0 if shift > 40 else ((m * self._num) >> shift) // self._den
-            q = -m if q & 0x80 else m
-        return (self._c + q + (1 << (_Q - 1))) >> _Q
+            return (self._c + ((degrees * self._num << _Q) // self._den)) >> _Q
+        return self._float(degrees)
+
+    def _float(self, degrees):
+        # position() of degrees, a float within the limits (Robot checks them, then calls
+        # this), without a float: from the float's sign, its exponent e and the top 22 bits
+        # of its significand m (1 <= m / 2**21 < 2), degrees = m * 2**(e - 148), read as
+        # two 16-bit halves (the high one: sign, e, the top 7 bits of m). |degrees| < 512,
+        # so the shift is to the right, and m * num < 2**30 stays a small int on a 32-bit
+        # port.
+        h = _bits
+        pack_into("<f", h, 0, degrees)
+        hi = h[1]
+        m = (
+            ((hi & 0x7F | 0x80) << 14 | h[0] >> 2) * self._num >> 138 - (hi >> 7 & 0xFF)
+        ) // self._den
+        if hi & 0x8000:
+            return (self._c - m) >> _Q
+        return (self._c + m) >> _Q
 
     def degrees(self, position):
         """The joint's angle in degrees at position (not clamped)."""
@@ -232,8 +241,7 @@ class Robot:
         self._live = []  # pairs of the joints in the stream, in the order they came
         self._live_i = []  # their joints' indices
         self._sends = {}  # {k: a list of k pairs}: a move's frame, made once for each k
-        self._sel = [0] * n  # a move's joints' indices (Robot._move())
-        self._put = [0] * n  # and their positions
+        self._sel = [0] * n  # a move's joints' indices (Robot.move(), stream())
         self._in = bytearray(n)  # 1: the joint is in the stream
         self._fresh = False  # targets not yet sent
         now = time.ticks_ms()
@@ -283,10 +291,6 @@ class Robot:
             raise ValueError("no joint %r: the joints are %s" % (name, ", ".join(self.names)))
         return i
 
-    def _targets(self, targets):
-        # Check a pose {name: degrees} (for a Player, home()), as move() does; nothing sent.
-        self._move(targets, 0, None, False)
-
     def _read(self, indices, got=None):
         # Read positions of these joints into _at (or take them from got). A servo that
         # does not answer (its position None, or none read) has no angle: refuse it by
@@ -309,52 +313,67 @@ class Robot:
         """Move joints {name: degrees} together in one frame, within ms, or at dps
         (degrees per second) for the joint that goes furthest. Return the move's
         time in ms (longer than asked if a joint's own dps needed it)."""
-        if (ms is None) == (dps is None):
-            raise ValueError("give move() ms or dps (not both), got ms=%r dps=%r" % (ms, dps))
-        if ms is not None:
-            if _type(ms) is not _int or not 0 <= ms <= _MS_MAX:
-                _ms("ms", ms)  # raises, naming it
-        else:
-            _dps(dps)
-        return self._move(targets, ms, dps, True)
-
-    def _move(self, targets, ms, dps, send):
-        # move()'s work, in one function (on MicroPython a call of one with many locals takes
-        # a heap block): check targets (the one place they are checked: _targets() too), then
-        # if send, time the move and send it. No comprehensions, items(), dicts or tuples:
-        # each is a heap object. The joints' indices go in _sel[:k], their positions in
-        # _put[index], both made once in Robot().
+        # One function (on MicroPython a call of one with many locals takes a heap block):
+        # check targets (the one place a move's are checked: a Player and home() too, with
+        # ms _CHECK), then time the move and send it. No comprehensions, items(), dicts or
+        # tuples: each is a heap object. Each joint's position goes in its [id, position]
+        # pair (the stream's: step() writes it again before it sends), the pairs in a list of
+        # k made once for each k, their indices in _sel[:k].
+        if ms is not _CHECK:
+            if (ms is None) == (dps is None):
+                raise ValueError("give move() ms or dps (not both), got ms=%r dps=%r" % (ms, dps))
+            if ms is not None:
+                if _type(ms) is not _int or not 0 <= ms <= _MS_MAX:
+                    _ms("ms", ms)  # raises, naming it
+            else:
+                _dps(dps)
         if _type(targets) is not dict or not targets:
             raise TypeError("targets must be a dict {joint name: degrees}, got %r" % (targets,))
         clamped = 0
         index = self._index
         joints = self._joints
+        pairs = self._pairs
         sel = self._sel
-        put = self._put
+        k = len(targets)
+        sends = self._sends.get(k)
+        made = sends is None
+        if made:  # kept once the targets are known good
+            sends = [None] * k
         k = 0
         capped = dps  # a speed to keep: the call's, or a joint's own
-        for name in targets:
-            i = index.get(name) if _type(name) is str else None
-            if i is None:
-                self._i(name)  # raises, naming the joints
-            degrees = targets[name]
-            t = _type(degrees)
-            if t is not _int and (t is not _float or not _NINF < degrees < _INF):
-                number("targets[%r]" % name, degrees)  # raises, naming it
-            joint = joints[i]
-            if degrees < joint.lo or degrees > joint.hi:
-                clamped += 1
-            put[i] = joint.position(degrees)
-            sel[k] = i
-            k += 1
-            if joint.dps:
-                capped = True
-        if not send:
+        name = None
+        try:
+            for name in targets:
+                i = index[name]
+                degrees = targets[name]
+                joint = joints[i]
+                pair = pairs[i]
+                t = _type(degrees)
+                # A float within the limits is finite: its position at once; else, if a
+                # number, a position clamped to the limits.
+                if t is _float and joint.lo <= degrees <= joint.hi:
+                    pair[1] = joint._float(degrees)
+                else:
+                    if t is not _int and (t is not _float or not _NINF < degrees < _INF):
+                        number("targets[%r]" % name, degrees)  # raises, naming it
+                    if not joint.lo <= degrees <= joint.hi:
+                        clamped += 1
+                    pair[1] = joint.position(degrees)
+                sends[k] = pair
+                sel[k] = i
+                k += 1
+                if joint.dps:
+                    capped = True
+        except KeyError:
+            self._i(name)  # raises, naming the joints
+        if ms is _CHECK:
             return 0
+        if made:
+            self._sends[k] = sends
         at = self._at
         took = ms or 0
-        slowed = 0
         if capped:
+            slowed = 0
             unknown = None
             for j in range(k):
                 i = sel[j]
@@ -367,14 +386,14 @@ class Robot:
             if dps:
                 for j in range(k):
                     i = sel[j]
-                    need = _time(abs(put[i] - at[i]) / joints[i].per_degree, dps)
+                    need = _time(abs(sends[j][1] - at[i]) / joints[i].per_degree, dps)
                     if need > took:
                         took = need
             for j in range(k):
                 i = sel[j]
                 joint = joints[i]
                 if joint.dps:
-                    need = _time(abs(put[i] - at[i]) / joint.per_degree, joint.dps)
+                    need = _time(abs(sends[j][1] - at[i]) / joint.per_degree, joint.dps)
                     if need > took:
                         took = need
                         slowed = 1
@@ -383,24 +402,14 @@ class Robot:
                     "the move would take %d ms, more than %d: move in steps, or faster"
                     % (took, _MS_MAX)
                 )
-        self._stop_stream()
-        # The frame's [id, position] pairs are the stream's (it has ended), in a list of k
-        # made once: a move allocates no pairs.
-        pairs = self._pairs
-        sends = self._sends.get(k)
-        if sends is None:
-            sends = self._sends[k] = [None] * k
-        for j in range(k):
-            i = sel[j]
-            pair = pairs[i]
-            pair[1] = put[i]
-            sends[j] = pair
+            self.slowed += slowed
+        if self._live or self._fresh:
+            self.hold()  # (the pairs are the stream's: it ends)
         self.bus.move_many(sends, took)
         for j in range(k):
-            i = sel[j]
-            at[i] = put[i]
-        self.clamped += clamped
-        self.slowed += slowed
+            at[sel[j]] = sends[j][1]
+        if clamped:
+            self.clamped += clamped
         return took
 
     def where(self, names=None, positions=None):
@@ -421,7 +430,7 @@ class Robot:
         """Let these joints (all by default) go limp, to be posed by hand; the
         next move gives them their torque back. Ends the stream."""
         indices = list(range(len(self.names))) if names is None else [self._i(n) for n in names]
-        self._stop_stream()
+        self.hold()
         self.bus.unload([self._ids[i] for i in indices])
         for i in indices:
             self._at[i] = None  # they will be moved by hand
@@ -432,7 +441,7 @@ class Robot:
         _dps(dps)
         if pose is None:
             pose = {name: min(max(0, j.lo), j.hi) for name, j in self.joints.items()}
-        self._targets(pose)  # check it before anything is sent
+        self.move(pose, _CHECK)  # check it before anything is sent
         self._read(list(range(len(self.names))))
         return self.move(pose, dps=dps)
 
@@ -441,7 +450,7 @@ class Robot:
         joint goes limp."""
         if self.player:
             self.player.stop()
-        self._stop_stream()
+        self.hold()
         for i in range(len(self._at)):
             self._at[i] = None
         try:
@@ -460,29 +469,37 @@ class Robot:
         index = self._index
         joints = self._joints
         tmp = self._tmp
+        sel = self._sel
+        at = self._at
         clamped = 0
+        k = 0
         for name in targets:  # check all first: a bad one stores nothing
-            i = index.get(name) if _type(name) is str else None
+            i = index.get(name)
             if i is None:
                 self._i(name)
             degrees = targets[name]
-            t = _type(degrees)
-            if t is not _int and (t is not _float or not _NINF < degrees < _INF):
-                number("targets[%r]" % name, degrees)
             joint = joints[i]
-            if degrees < joint.lo or degrees > joint.hi:
-                clamped += 1
-            if joint._pps and self._at[i] is None:
+            if joint._pps and at[i] is None:
                 raise ValueError(
                     "joint %r has a dps limit and no known position: home() or where() first"
                     % name
                 )
-            tmp[i] = joint.position(degrees)
+            t = _type(degrees)
+            if t is _float and joint.lo <= degrees <= joint.hi:  # as move()
+                tmp[k] = joint._float(degrees)
+            else:
+                if t is not _int and (t is not _float or not _NINF < degrees < _INF):
+                    number("targets[%r]" % name, degrees)
+                if not joint.lo <= degrees <= joint.hi:
+                    clamped += 1
+                tmp[k] = joint.position(degrees)
+            sel[k] = i
+            k += 1
         goal = self._goal
         streamed = self._in
-        for name in targets:
-            i = index[name]
-            goal[i] = tmp[i]
+        for j in range(k):
+            i = sel[j]
+            goal[i] = tmp[j]
             if not streamed[i]:
                 streamed[i] = 1
                 self._live.append(self._pairs[i])
@@ -506,8 +523,10 @@ class Robot:
         if self._slowing and time.ticks_diff(now, self._sent) < self._ms:
             return False  # a slowed joint is on its way: its next step once it is there
         live = self._live
-        frame = self.frame_ms or 3 * len(live) + 8  # ms: at 9600 baud, until measured
-        ahead = self.bus.wire_ms()
+        n = len(live)
+        frame = self.frame_ms or 3 * n + 8  # ms: at 9600 baud, until measured
+        bus = self.bus
+        ahead = bus.wire_ms()
         if ahead > (since if since < frame else frame):
             return False
         # Interpolate over the time to the next update: the pace of stream(),
@@ -526,23 +545,26 @@ class Robot:
         # frame goes before the servo is there (above). So a joint never turns faster than
         # its dps, however fast step() runs and however fast the targets come. A glide grows
         # by the loop's lateness, up to 10 loop periods: a new target is heard within them,
-        # and the joint goes at 10/11 of its dps at the least.
-        elapsed = time.ticks_diff(now, self._sent)
-        cap = self._ms + since
-        if cap > 10 * since:
-            cap = 10 * since
-        if cap < ms:
-            cap = ms
-        if elapsed > cap:
-            elapsed = cap
+        # and the joint goes at 10/11 of its dps at the least. (Worked out at the first such
+        # joint: elapsed is -1 until then.)
+        elapsed = -1
         glide = ms
         fresh = False
         live_i = self._live_i
-        for k in range(len(live)):
+        for k in range(n):
             i = live_i[k]
             position = goal[i]
             pps = joints[i]._pps
             if pps:  # no faster than the joint's dps: step towards the goal
+                if elapsed < 0:
+                    elapsed = time.ticks_diff(now, self._sent)
+                    cap = self._ms + since
+                    if cap > 10 * since:
+                        cap = 10 * since
+                    if cap < ms:
+                        cap = ms
+                    if elapsed > cap:
+                        elapsed = cap
                 owed[i] += pps * elapsed
                 most = owed[i] // 1000
                 if position > at[i] + most:
@@ -558,20 +580,20 @@ class Robot:
                 if need > glide:
                     glide = need
             live[k][1] = position
-        self.bus.move_many(live, glide)
+        bus.move_many(live, glide)
         self._sent = now
         self._ms = glide
         self._slowing = fresh or glide > ms  # still on its way: the next frame waits
-        for k in range(len(live)):
+        for k in range(n):
             at[live_i[k]] = live[k][1]
         if fresh:
             self.slowed += 1
         self._fresh = fresh
         self.updates += 1
         # The frame's time on the wire, as wire_ms() grew (whole ms: the most seen).
-        sent = self.bus.wire_ms() - ahead
-        if len(live) != self._frame_n:
-            self._frame_n = len(live)
+        sent = bus.wire_ms() - ahead
+        if n != self._frame_n:
+            self._frame_n = n
             self.frame_ms = 0
         if sent > self.frame_ms:
             self.frame_ms = sent
@@ -580,10 +602,6 @@ class Robot:
     def hold(self):
         """End the stream: targets not yet sent are dropped, and each joint stops
         at the last target sent. Nothing is sent. A later stream() starts afresh."""
-        self._stop_stream()
-
-    def _stop_stream(self):
-        # Forget the stream's targets: a later stream() starts afresh.
         self._fresh = False
         if self._live:
             for i in self._live_i:
@@ -654,7 +672,7 @@ class Player:
         self.speed = speed
         self._poses = []
         for pose, ms in sequence.steps:
-            robot._targets(pose)  # every name and number checked before anything moves
+            robot.move(pose, _CHECK)  # every name and number checked before anything moves
             self._poses.append((pose, _ms("ms / speed", round(ms / speed))))
         self.index = -1  # the pose last sent
         self.loops = 0  # times the sequence has come round again

@@ -17,9 +17,10 @@
 #      a UART that takes all at once, as a board's does in C), pose() alone, with a pitch and
 #      with none, a line's step(); and heap bytes per call (exact).
 #   4. with --count, the same calls counted in instructions (valgrind --tool=callgrind, the unix
-#      port with an RP2040's heap: the allocator's work grows with the heap), now and before,
-#      and the RP2040's ms they make, scaled by the ms measured there before: the same counts
-#      every run, on any machine (a few minutes: valgrind is slow).
+#      port with an RP2040's heap: the allocator's work grows with the heap), now, before, and
+#      after the first round of making them faster (ROUND1), and the RP2040's ms they make,
+#      scaled by the ms measured there before: the same counts every run, on any machine
+#      (some minutes: valgrind is slow).
 #
 #   sh boards/unix.sh tests/bench_arm.py      # prints Markdown tables
 #   sh boards/unix.sh tests/bench_arm.py --count   # and the instructions (valgrind)
@@ -277,6 +278,9 @@ class Clock:
 
 
 BEFORE = "855a672"  # the arm and the motion layer before move_to() was made faster (issue 29)
+# The code after the first round of that (the motion29 branch, merged), which --count counts
+# too: what the second round changed.
+ROUND1 = "6d08c3e"
 COUNT_CALLS = 1000  # calls a count, under valgrind
 # Measured on an RP2040 (the real rp2 firmware) before, in ms: the counts scale to these.
 RP2040_MS = {"pose(x, y, z, pitch)": 1.0, "move_to(x, y, z, pitch, ms=)": 3.4}
@@ -304,21 +308,23 @@ def load_before():
     return busservo_motion_before, busservo_arm_before
 
 
-def fetch_before(folder):
-    """Write BEFORE's modules into folder, the arm importing the motion layer of then."""
+def fetch_before(folder, commit=BEFORE, suffix="before"):
+    """Write the modules of commit (BEFORE's by default) into folder, as busservo_motion_SUFFIX
+    and busservo_arm_SUFFIX, the arm importing the motion layer of then."""
     ok, _ = sh(
-        "git show %s:lib/busservo_motion.py >%s/busservo_motion_before.py" % (BEFORE, folder)
+        "git show %s:lib/busservo_motion.py >%s/busservo_motion_%s.py" % (commit, folder, suffix)
     )
-    ok2, _ = sh("git show %s:lib/busservo_arm.py >%s/arm.py" % (BEFORE, folder))
+    ok2, _ = sh("git show %s:lib/busservo_arm.py >%s/arm.py" % (commit, folder))
     if not (ok and ok2):
         return False
     with open(folder + "/arm.py") as f:
         text = f.read()
     text = text.replace(
-        "\nimport busservo_motion\n", "\nimport busservo_motion_before as busservo_motion\n"
+        "\nimport busservo_motion\n", "\nimport busservo_motion_%s as busservo_motion\n" % suffix
     )
-    with open(folder + "/busservo_arm_before.py", "w") as f:
+    with open("%s/busservo_arm_%s.py" % (folder, suffix), "w") as f:
         f.write(text)
+    sh("rm %s/arm.py" % folder)
     return True
 
 
@@ -411,10 +417,10 @@ def solve(calls=CALLS):
 
 def count_one(k, calls, folder, which, heap):
     """Instructions a call of COUNTED[k] (valgrind's callgrind, the unix port with a heap of
-    heap), of this code ("now") or of BEFORE's ("before"), as .mpy in folder: a run of calls
-    of it less a run of none, over calls. None if it could not be counted. Both versions are
-    loaded in each run (what else is on the heap changes the allocator's work), and CPython,
-    which the unix port runs in, hashes the same every run (PYTHONHASHSEED)."""
+    heap), of this code ("now"), BEFORE's ("before") or ROUND1's ("round1"), as .mpy in folder:
+    a run of calls of it less a run of none, over calls. None if it could not be counted. All
+    versions are loaded in each run (what else is on the heap changes the allocator's work),
+    and CPython, which the unix port runs in, hashes the same every run (PYTHONHASHSEED)."""
     got = []
     for n in (0, calls):
         ok, out = sh(
@@ -443,20 +449,22 @@ HEAPS = ("176K", "208K", "240K", "272K")
 
 
 def count(calls=COUNT_CALLS, counted=COUNTED, heaps=HEAPS):
-    """[{what, now, before, low, high, rp2040_ms, rp2040_before_ms}]: instructions a call
-    now and BEFORE (the mean over heaps; now's least and most), and the RP2040's ms estimated
-    from them; None where valgrind, mpy-cross or the git history is missing."""
+    """[{what, now, before, round1, low, high, rp2040_ms, rp2040_before_ms,
+    rp2040_round1_ms}]: instructions a call now, BEFORE and ROUND1 (the mean over heaps; now's
+    least and most), and the RP2040's ms estimated from them; None where valgrind, mpy-cross
+    or the git history is missing."""
     if not sh("valgrind --version")[0]:
         return None
     folder = scratch("arm-count")
     os.mkdir(folder)
     try:
-        if not fetch_before(folder):
+        if not (fetch_before(folder) and fetch_before(folder, ROUND1, "round1")):
             return None
         # The modules as a board loads them: compiled (no compiler's garbage on the heap).
         sources = ["lib/busservo.py", "lib/busservo_motion.py", "lib/busservo_arm.py"]
         sources += ["tests/bench_arm.py", "tests/shell.py"]
-        sources += [folder + "/busservo_motion_before.py", folder + "/busservo_arm_before.py"]
+        for suffix in ("before", "round1"):
+            sources += ["%s/busservo_%s_%s.py" % (folder, m, suffix) for m in ("motion", "arm")]
         for path in sources:
             name = path.rpartition("/")[2][:-3]
             if not sh("%s -o %s/%s.mpy %s" % (MPY_CROSS, folder, name, path))[0]:
@@ -467,13 +475,15 @@ def count(calls=COUNT_CALLS, counted=COUNTED, heaps=HEAPS):
             k = COUNTED.index(w)
             now = [count_one(k, calls, folder, "now", h) for h in heaps]
             then = [count_one(k, calls, folder, "before", h) for h in heaps]
-            if None in now or None in then:
+            round1 = [count_one(k, calls, folder, "round1", h) for h in heaps]
+            if None in now or None in then or None in round1:
                 return None
             rows.append(
                 {
                     "what": w,
                     "now": sum(now) / len(now),
                     "before": sum(then) / len(then),
+                    "round1": sum(round1) / len(round1),
                     "low": min(now),
                     "high": max(now),
                 }
@@ -485,18 +495,23 @@ def count(calls=COUNT_CALLS, counted=COUNTED, heaps=HEAPS):
     for r in rows:
         r["rp2040_ms"] = r["now"] * per
         r["rp2040_before_ms"] = r["before"] * per
+        r["rp2040_round1_ms"] = r["round1"] * per
     return rows
 
 
 def loop(k, calls, folder, which):
-    """The child of count_one(): calls calls of COUNTED[k] (of this code, or of BEFORE's
-    modules in folder), then exit."""
+    """The child of count_one(): calls calls of COUNTED[k] (of this code, or of BEFORE's or
+    ROUND1's modules in folder), then exit."""
     import busservo_arm_before
+    import busservo_arm_round1
     import busservo_motion_before
+    import busservo_motion_round1
 
     versions = (bm, ba)
     if which == "before":
         versions = (busservo_motion_before, busservo_arm_before)
+    elif which == "round1":
+        versions = (busservo_motion_round1, busservo_arm_round1)
     clock = Clock()
     found = [row for row in cases(*versions, clock) if row[0] == COUNTED[k]]
     _, call, before, clocked = found[0]
@@ -611,33 +626,38 @@ def main(ports=None, speeds=SPEEDS, grid=GRID, calls=CALLS, out=print, counted=F
         out(
             "Instructions a call (valgrind --tool=callgrind; the unix port, the modules as .mpy,"
             " %d calls less none, over %d; the mean over heaps of %s, and now's least and most),"
-            " and the RP2040's ms they make, scaled by %s measured there before (by the one"
-            " that gives more):"
+            " this code, that of %s (before) and that of %s (the first round), and the"
+            " RP2040's ms they make, scaled by %s measured there before (by the one that gives"
+            " more):"
             % (
                 COUNT_CALLS,
                 COUNT_CALLS,
                 ", ".join(HEAPS),
+                BEFORE,
+                ROUND1,
                 " and ".join("%s %.1f ms" % i for i in RP2040_MS.items()),
             )
         )
         out("")
         out(
-            "| call | instructions | least..most | before | now / before | RP2040, ms (est.)"
-            " | before |"
+            "| call | instructions | least..most | before | %s | now / %s | RP2040, ms (est.)"
+            " | before | %s |" % (ROUND1, ROUND1, ROUND1)
         )
-        out("| --- | ---: | ---: | ---: | ---: | ---: | ---: |")
+        out("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
         for r in rows:
             out(
-                "| %s | %d | %d..%d | %d | %.2f | %.2f | %.2f |"
+                "| %s | %d | %d..%d | %d | %d | %.2f | %.2f | %.2f | %.2f |"
                 % (
                     r["what"],
                     r["now"],
                     r["low"],
                     r["high"],
                     r["before"],
-                    r["now"] / r["before"],
+                    r["round1"],
+                    r["now"] / r["round1"],
                     r["rp2040_ms"],
                     r["rp2040_before_ms"],
+                    r["rp2040_round1_ms"],
                 )
             )
     return rt, lines, figures

@@ -277,6 +277,40 @@ class Refusals(Tidy):
         # One read, for the move at mm_s=0.001 that had to know where the arm is: no move.
         self.assertEqual(commands(w), [CMD_MULT_SERVO_POS_READ])
 
+    def test_after_a_refusal_or_an_interrupt_the_next_move_and_step_go(self):
+        # move_to() and a line's step() work in a generator made once (busservo_arm): what
+        # one call raised, Ctrl-C too, is raised again and leaves it ready for the next.
+        w, bus = world()
+        a = arm(bus)
+        settle(w, bus, 10)
+        raises(lambda: a.move_to(500, 0, 40, ms=500), "out of reach")
+        raises(lambda: a.pose(100, 0, 40, "down"), "pitch")
+        self.assertEqual(a.move_to(150, 0, 40, -90, ms=30), 30)
+        robot = a.robot
+
+        def interrupted(*args):
+            del robot.move  # the Robot's own again
+            raise KeyboardInterrupt
+
+        robot.move = interrupted
+        with self.assertRaises(KeyboardInterrupt):
+            a.move_to(150, 0, 20, -90, ms=30)
+        self.assertEqual(a.move_to(150, 0, 20, -90, ms=30), 30)
+        settle(w, bus, 50)
+        self.assertEqual(len(moves(w)), 2)
+        line = a.line_to(150, 50, 20, mm_s=100)
+
+        def broken():
+            del robot.step
+            raise OSError(110, "the UART took nothing")
+
+        robot.step = broken
+        with self.assertRaises(OSError):
+            line.step()
+        self.assertTrue(line.step())
+        settle(w, bus, 50)
+        self.assertEqual(len(moves(w)), 3)
+
     def test_a_line_leaving_the_reach_is_refused_whole_and_nothing_is_sent(self):
         # Both ends in reach, with the base at +-116.6 degrees; the line between them passes
         # behind the base, which turns 240 degrees at most.
