@@ -35,6 +35,9 @@ import busservo_motion as bm
 import busservo_record as br
 import busservo_web as web
 
+if not hasattr(time, "ticks_ms"):  # CPython, on a computer: busservo_cpython gives what it lacks
+    from busservo_cpython import time
+
 FILE = "recording.rec"  # where a recording goes (busservo_record's compact form)
 MAX_S = 120  # a recording stops by itself after this (6 joints at 25 reads a second: 24 KB)
 DPS = 30  # into a replay's first pose, or the leader's pose, at this speed
