@@ -42,6 +42,7 @@ import busservo_motion as bm
 
 MAGIC = b"BSREC1\n"  # the compact file's first bytes; a JSON line of its joints follows
 PIECE = const(256)  # bytes written to the file at a time
+HALT_MS = 100  # a playback stopped by Ctrl-C on a move's way: the servos go where they are
 _KEY = const(0xFFFF)  # a key sample's first 2 bytes: whole positions follow
 _DT_MAX = const(0xFFFE)  # ms a sample's 2 bytes of time hold
 _END = object()  # what next() gives once a query has ended
@@ -664,7 +665,8 @@ class Playback:
         return 0 if wait < 0 else most if wait > most else wait
 
     def wait(self):
-        """Play to the end, blocking; Ctrl-C stops it (and is raised again)."""
+        """Play to the end, blocking; Ctrl-C stops it (and is raised again), the servos where
+        they are if a move was on its way (the one into the first pose takes seconds)."""
         try:
             while not self.done:
                 self.step()
@@ -672,6 +674,12 @@ class Playback:
                     time.sleep_ms(self._wait_ms(20))
         except KeyboardInterrupt:
             self.stop()
+            if self._phase and time.ticks_diff(self._due, time.ticks_ms()) > 0:
+                robot = self.robot
+                try:  # where they are, read (blocking: Ctrl-C was pressed), then held
+                    robot.move(robot.where(self.names), ms=HALT_MS)
+                except (OSError, ValueError):
+                    pass  # a servo that does not answer: the move on its way is made
             raise
 
     async def run(self, poll_ms=20):

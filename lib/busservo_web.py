@@ -67,6 +67,10 @@
 #   await panel.positions(ids)          {servo_id: position}, read without waiting on the
 #   await panel.where(names)            wire; {name: degrees}, as Robot.where() gives them
 #   panel.pose(pose, what)              a pose {joint: degrees}, checked, or refused (400)
+#   panel.halt(names)                   a move stopped on its way (a sequence's pose, a
+#                                       replay's first pose): these joints are sent where
+#                                       they are, once read, unless something is ordered
+#                                       meanwhile (never waits: a task, panel.halting)
 #   panel.adopt(robot)                  drive another robot (a calibration just saved)
 #   panel.failed(e)                     show an error on the page while it lasts
 #   panel.robot, .bus, .path            the robot, its bus, the calibration file
@@ -112,6 +116,7 @@ _TICK_MS = const(10)  # the panel's loop: poll the bus, step the stream and the 
 _ASK_MS = const(5)  # a query's next step: a byte takes 1 ms at 9600 baud
 _ERROR_MS = const(3000)  # the loop's last error shows this long after it last happened
 _POSITIONS = 21  # busservo.CMD_MULT_SERVO_POS_READ: a reply of positions
+HALT_MS = 100  # a move stopped on its way (halt()): the joints go where they are, in this
 # The parts serve() plugs in: (module, None: at once; or NAME: when /api/NAME is first asked
 # for, or, with a condition, when condition(panel) holds: at the start, or once a
 # calibration is saved; NAME may be a tuple of names, any of which plugs it in). The jog, the
@@ -364,6 +369,7 @@ class Panel:
         self.busy = None  # (part, why) while a part holds the joints, else None
         self.orders = 0  # one more with each order: a read begun before one is void
         self.read_ms = _READ_MS
+        self.halting = None  # the task of the last halt(), awaited as serve() ends
         self.error = None  # the last error of the loop, for the page
         self._error_at = 0
         self._password = password.encode()
@@ -458,6 +464,20 @@ class Panel:
         names = robot.names if names is None else names
         got = await self.positions([robot.joints[name].servo_id for name in names])
         return robot.where(names, got)  # what came: it does not ask again
+
+    def halt(self, names):
+        """Send these joints where they are, once a read of them has come (a move stopped on
+        its way: a sequence's pose, a replay's first pose), unless something else is ordered
+        meanwhile (a stream, a limp, a STOP). Never waits: a task reads (panel.halting)."""
+        self.halting = asyncio.create_task(self._halt(names, self.orders))
+
+    async def _halt(self, names, orders):
+        try:
+            pose = await self.where(names)
+            if self.orders == orders:  # nothing else ordered since: no stream, no limp
+                self.robot.move(pose, ms=HALT_MS)
+        except Exception as e:  # the controller did not answer: the move on its way is made
+            self.failed(e)
 
     def adopt(self, robot):
         """Drive robot from now on (the calibration just saved): the page reads its joints
@@ -807,4 +827,6 @@ async def serve(
         panel.disarm()
         for part in panel._parts:
             if hasattr(part, "close"):
-                await part.close()  # a sequence stopped mid-pose: where the joints are
+                await part.close()
+        if panel.halting:
+            await panel.halting  # a move stopped on its way: where the joints are

@@ -86,12 +86,17 @@ class Record:
         if self.teleop:
             raise web.Refused(409, _TELEOP)
 
-    def stop(self):
-        """End what runs: the recording (kept; the joints stay limp), the replay (the move on
-        its way is made) or the teleop (the leader stays limp)."""
-        if self.player:
-            self.player.stop()
+    def stop(self, halt=True):
+        """End what runs: the recording (kept; the joints stay limp), the replay (with halt,
+        the joints stop where they are: the move into its first pose takes seconds) or the
+        teleop (the leader stays limp)."""
+        player = self.player
+        if player:
             self.player = None
+            if not player.done:
+                player.stop()
+                if halt:
+                    self.panel.halt(player.names)
         if self.teleop:
             self.teleop.stop()
             self.teleop = None
@@ -171,7 +176,7 @@ class Record:
             self.stop()
 
     def still(self, halt):
-        self.stop()
+        self.stop(halt)
 
     async def close(self):
         self.stop()  # a recording under way: its file closed, kept

@@ -23,7 +23,6 @@ import busservo_web as web
 FOLDER = "sequences"
 NAME_MAX = 24
 MS_DEFAULT = 1000  # time to reach an added pose, if the request gives none
-HALT_MS = 100  # a sequence stopped mid-pose: the joints go where they are, in this
 _NAME_CHARS = "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_"
 _PLAYING = "a sequence is playing: stop it first"
 
@@ -48,7 +47,6 @@ class Teach:
         self.sequence = bm.Sequence()
         self.edits = 0  # changes to the sequence: the page reads it again when this grows
         self.player = None
-        self.halting = None  # the task that halts a sequence stopped mid-pose
 
     # Playing.
 
@@ -77,21 +75,12 @@ class Teach:
                 names = set()
                 for pose, _ in self.sequence.steps:
                     names.update(pose)
-                self.halting = web.asyncio.create_task(self._halt(list(names), self.panel.orders))
+                self.panel.halt(list(names))
 
     def _done(self):
         self.player = None
         if self.panel.busy and self.panel.busy[0] is self:
             self.panel.busy = None
-
-    async def _halt(self, names, orders):
-        panel = self.panel
-        try:
-            pose = await panel.where(names)
-            if panel.orders == orders:  # nothing else ordered since: no stream, no limp
-                panel.robot.move(pose, ms=HALT_MS)
-        except Exception as e:  # the controller did not answer: the pose is reached
-            panel.failed(e)
 
     def _not_playing(self):
         if self.player:
@@ -125,10 +114,6 @@ class Teach:
 
     def still(self, halt):
         self.stop(halt)
-
-    async def close(self):
-        if self.halting:
-            await self.halting  # a sequence stopped mid-pose: where the joints are
 
     # The routes.
 
@@ -182,7 +167,7 @@ class Teach:
         return self.panel.state(token)
 
     async def post_stop(self, body, token):
-        self.panel.order(self)
+        self.panel.order(self, halt=True)  # a replay on its way stops where it is too
         self.stop()
         return self.panel.state(token)
 

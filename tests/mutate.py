@@ -1209,6 +1209,12 @@ MUTANTS = {
             "            if session[2]:\n                lost = session[2]",
             "every page is told why another's arming ended, as if it were its own",
         ),
+        (
+            "stop-no-halt-move",
+            "                self.robot.move(pose, ms=HALT_MS)",
+            "                pass",
+            "STOP mid-pose lets the joints go on to the pose (a sequence's, a replay's first)",
+        ),
     ],
     # busservo_web_sliders: a slider's target.
     "busservo_web_sliders": [
@@ -1251,12 +1257,6 @@ MUTANTS = {
             "            if halt:\n                names = set()",
             "            if not halt:\n                names = set()",
             "STOP lets the pose on its way go on; estop reads and moves before going limp",
-        ),
-        (
-            "stop-no-halt-move",
-            "                panel.robot.move(pose, ms=HALT_MS)",
-            "                pass",
-            "STOP mid-pose lets the joints go on to the pose",
         ),
         (
             "player-never-done",

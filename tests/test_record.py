@@ -491,6 +491,32 @@ class Playing(Tidy):
                 w.clock.advance_ms(1)
             self.assertEqual(len(moves(w)), sent, how)
 
+    def test_ctrl_c_on_the_way_to_the_first_pose_leaves_the_servos_where_they_are(self):
+        # Into its first pose a playback goes in one move at its dps, seconds long: Ctrl-C in
+        # wait() on its way stops the servos where they are (read, then held there), as the
+        # command's Ctrl-C does. They went on to the first pose (a newcomer's run found it).
+        w, bus, robot, recording = recorded(ms=1000)
+        for i in range(1, 7):
+            w.sim.turn(i, 900)  # the hands left the arm far from the recording's start
+        player = recording.play(robot, dps=30)  # some 3 s to the first pose
+        for _ in range(1000):
+            player.step()
+            w.clock.advance_ms(1)
+        self.assertIsNone(player.started)  # on its way still
+        br.time = Interrupted(w.clock)
+        try:
+            player.wait()
+            raise AssertionError("no KeyboardInterrupt")
+        except KeyboardInterrupt:
+            pass
+        br.time = w.clock
+        stopped = [w.sim.position(i) for i in range(1, 7)]
+        self.assertTrue(all(p < 880 for p in stopped), stopped)  # it had set off
+        w.run_ms(4000)
+        at = [w.sim.position(i) for i in range(1, 7)]
+        for k in range(6):
+            self.assertTrue(abs(at[k] - stopped[k]) <= 25, (stopped, at))
+
     def test_a_new_player_or_a_line_stops_it_and_it_stops_a_sequence(self):
         import busservo_arm as ba
 

@@ -1417,7 +1417,7 @@ class Loop(Tidy):
             task = asyncio.create_task(panel.run())
             await asyncio.sleep_ms(0)  # one tick: it fails, and the panel goes on
             task.cancel()
-            await teach(panel).halting  # the halt: where the joints are read, then sent there
+            await panel.halting  # the halt: where the joints are read, then sent there
 
         busservo_web.asyncio = OnTheWorldsClock
         try:
@@ -1428,7 +1428,7 @@ class Loop(Tidy):
         self.assertIn("OSError", panel.error)
         self.tick(w, panel, token, 50)
         halt = [f for f in w.frames() if f[3] == CMD_SERVO_MOVE][-1]
-        self.assertEqual(halt[5] | halt[6] << 8, busservo_web_teach.HALT_MS)
+        self.assertEqual(halt[5] | halt[6] << 8, busservo_web.HALT_MS)
 
     def test_no_position_read_goes_out_while_a_drag_streams(self):
         # The stream comes first: the panel reads positions only when the wire is free.
@@ -2434,6 +2434,34 @@ class Recording(Tidy):
             status, reply = await http(port, "POST", "/api/record", {"on": False}, token)
             self.assertFalse(reply["rec"]["playing"], reply)
             self.assertIsNone(panel.busy)
+
+        recorded(scenario)
+
+    def test_a_replay_ended_on_its_way_to_its_first_pose_leaves_the_joints_where_they_are(self):
+        # Into its first pose a replay goes in one move at DPS, seconds long. Its End, disarming
+        # (the dead-man too) and Halt each stop the joints where they are, as they stop a
+        # sequence's pose; the move went on to the first pose (a newcomer's run found it).
+        async def scenario(port, world, robot):
+            token = await armed(port)
+            await record_sweep(port, world, token)  # the base from 500
+            for path, body in (
+                ("/api/record", {"on": False}),
+                ("/api/arm", {"on": False}),
+                ("/api/stop", {}),
+            ):
+                world.sim.turn(1, 100)  # the hands leave the base far from where it began
+                await http(port, "POST", "/api/arm", {"on": True}, token)
+                status, reply = await http(port, "POST", "/api/replay", {}, token)
+                self.assertEqual(status, 200, reply)
+                await polled(port, token, 800)  # on its way: 96 degrees at 30 a second
+                status, reply = await http(port, "POST", path, body, token)
+                self.assertEqual(status, 200, (path, reply))
+                self.assertFalse(reply["rec"]["playing"], path)
+                stopped = world.sim.position(1)
+                self.assertTrue(120 < stopped < 450, (path, stopped))
+                await polled(port, token, 1400)
+                at = world.sim.position(1)
+                self.assertTrue(abs(at - stopped) <= 60, (path, stopped, at))
 
         recorded(scenario)
 
