@@ -610,7 +610,7 @@ class Panel:
         if self.armed is not None:
             for token, seen, _ in self._sessions:
                 if token == self.armed and time.ticks_diff(now, seen) > _DEAD_MS:
-                    self.disarm(why="held: this page was silent for over 1 s (the dead-man)")
+                    self.disarm(why="disarmed: this page was silent for over 1 s (the dead-man)")
         for part in self._parts:
             if hasattr(part, "tick"):
                 part.tick(read)

@@ -698,10 +698,13 @@ class Panel(Browsing):
         self.open_and_log_in()
         self.assertIsNotNone(until(lambda: b.find_element(By.ID, "jogbox").is_displayed()))
         # No links in the calibration file: the panel has not loaded its jog (its RAM is the
-        # robot program's), and the state has no "arm"; the page says why all the same.
+        # robot program's), and the state has no "arm"; the page says why all the same. The
+        # example's robot has a claw, no wrist: links would not make it an arm, so the page
+        # says what it lacks (it said "no links": a newcomer gave links, to no avail).
         state = panel_state()
         self.assertNotIn("arm", state)
-        why = "No arm to jog: no links in the calibration file"
+        why = "No arm to jog: the jog moves an arm whose joints are base, shoulder, elbow, "
+        why += "wrist, and this robot has no wrist"
         self.assertIsNotNone(until(lambda: why in self.text("jogbox")))
         self.assertFalse(b.find_element(By.ID, "jog-x+").is_displayed())
 
