@@ -1034,8 +1034,8 @@ _COMMANDS = {
 
 
 def main(argv=None):
-    """The `busservo` command: returns its exit status (0 done, 1 failed, 2 bad usage,
-    130 stopped by Ctrl-C)."""
+    """The `busservo` command: returns its exit status (0 done, 1 failed or nothing moved
+    for want of --i-have-checked-my-robot, 2 bad usage, 130 stopped by Ctrl-C)."""
     args = list(sys.argv[1:] if argv is None else argv)
     run = None
     try:
