@@ -206,8 +206,8 @@ _USAGE = """usage: busservo COMMAND ...
                                        every interface or H's (--host 127.0.0.1: this one)
   busservo record PORT FILE [--seconds S] [%(checked)s]
                                        the joints go limp: move the arm by hand; records
-                                       until Ctrl-C (or S seconds) into FILE: FILE.rec (the
-                                       compact form) or FILE.jsonl (JSON lines)
+                                       until Ctrl-C (or S seconds) into FILE, whose name
+                                       ends in .rec (the compact form) or .jsonl (JSON lines)
   busservo play PORT FILE [--speed X] [%(checked)s]
                                        play a recording: into its first pose at 30
                                        degrees/s, then at its pace, X times (0.25..2, 1);
