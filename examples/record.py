@@ -35,11 +35,11 @@ recorder = br.Recorder(arm, path=PATH)  # the joints go limp
 print("the joints are limp: move the arm by hand for %d s" % SECONDS)
 start = time.ticks_ms()
 second = 0
-while time.ticks_diff(time.ticks_ms(), start) < SECONDS * 1000:
+while second < SECONDS:
     recorder.step()  # never waits for the wire: the loop is yours between steps
     if time.ticks_diff(time.ticks_ms(), start) >= (second + 1) * 1000:
         second += 1
-        print("  %d s: %d samples" % (second, recorder.samples))
+        print("  %d s: %d samples" % (second, recorder.samples))  # each second, the last too
     time.sleep_ms(1)
 recording = recorder.stop()
 print(

@@ -62,11 +62,15 @@ if RECORD:
     names = [n for n in leader.names if n in follower.joints]  # the joints the teleop reads
     recorder = busservo_record.Recorder(leader, names, RECORD, limp=False)
 # It warns of calibrations that disagree; with a recorder, it gives it each read of the leader.
-teleop = busservo_teleop.Teleop(leader, follower, dps=30, recorder=recorder)
+try:
+    teleop = busservo_teleop.Teleop(leader, follower, dps=30, recorder=recorder)
+except ValueError as e:  # the arms' calibrations do not fit together: say how, alone
+    print(e)
+    raise SystemExit(1)
 print("the leader is limp: move it by hand")
 start = time.ticks_ms()
 second = reads = 0
-while time.ticks_diff(time.ticks_ms(), start) < SECONDS * 1000:
+while second < SECONDS:
     teleop.step()  # never waits for the wire: the loop is yours between steps
     if time.ticks_diff(time.ticks_ms(), start) >= (second + 1) * 1000:
         second += 1

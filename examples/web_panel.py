@@ -53,8 +53,11 @@ def option(name, default):
     """--name VALUE or --name=VALUE from the command line (the unix port), else default."""
     args = sys.argv
     for i, arg in enumerate(args):
-        if arg == name and i + 1 < len(args):
-            return args[i + 1]
+        if arg == name:
+            if i + 1 < len(args):
+                return args[i + 1]
+            print("%s wants a value: %s %s" % (name, name, "N" if name == "--port" else "P"))
+            raise SystemExit(2)
         if arg.startswith(name + "="):
             return arg[len(name) + 1 :]
     return default

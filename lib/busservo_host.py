@@ -194,19 +194,20 @@ _USAGE = """usage: busservo COMMAND ...
   busservo move PORT ID POS MS [%(checked)s]
                                        move servo ID to POS (0..1000) over MS ms; Ctrl-C
                                        stops it where it is
-  busservo limp PORT ID [ID...]        servos ID... go limp (unload), to be turned by hand:
+  busservo limp PORT ID [ID...] [%(checked)s]
+                                       servos ID... go limp (unload), to be turned by hand:
                                        what they hold up falls; each holds again when moved
   busservo group PORT N [TIMES] [%(checked)s]
                                        run the controller's action group N (0..255) TIMES
-                                       times (1; 0: until stopped); Ctrl-C stops it
+                                       times (once; 0: until stopped); Ctrl-C stops it
   busservo stop PORT                   stop the action group that runs
   busservo panel PORT --password P [--port N] [--host H] [%(checked)s]
                                        the browser panel, at http://127.0.0.1:N/ (8080), on
                                        every interface or H's (--host 127.0.0.1: this one)
-  busservo record PORT FILE [--seconds S]
+  busservo record PORT FILE [--seconds S] [%(checked)s]
                                        the joints go limp: move the arm by hand; records
-                                       until Ctrl-C (or S seconds) into FILE (.jsonl: JSON
-                                       lines, else the compact form)
+                                       until Ctrl-C (or S seconds) into FILE, whose name
+                                       ends in .rec (the compact form) or .jsonl (JSON lines)
   busservo play PORT FILE [--speed X] [%(checked)s]
                                        play a recording: into its first pose at 30
                                        degrees/s, then at its pace, X times (0.25..2, 1);
@@ -216,15 +217,21 @@ _USAGE = """usage: busservo COMMAND ...
                                        the leader arm, limp, moved by hand, drives the
                                        follower live (each arm's robot.json: F1, F2); one
                                        PORT: both arms on its bus; Ctrl-C stops it; with
-                                       --record, each read of the leader goes into FILE too
+                                       --record, each read of the leader goes into FILE too;
+                                       on --sim without F1 and F2: the demo's arm on servos
+                                       1..4 leads the same arm on servos 7..10
   busservo --version                   busservo's version
 PORT is /dev/ttyUSB0, COM3, ... (a serial port), hid or hid:PATH (a USB HID controller: the
 first found, or that one), or --sim: a simulated controller, servos 1..6 (nothing real moves).
 The robot is the calibration in robot.json, in the folder you run from, else the demo's arm.
 --json: ports, check, scan, positions and move print JSON (and their words to stderr).
 --timeout MS: how long each query waits for its answer (500 ms, and 10 ms more an id).
-Anything that moves asks for %(checked)s: check first that the servos can turn
-freely, with nothing in their way.""" % {"checked": _CHECKED}
+Anything that moves or goes limp asks for %(checked)s: check first that the
+servos can turn freely, with nothing in their way, and hold an arm that goes limp (it falls).
+Without it the command says what it would do, moves nothing and ends with exit status 1.
+Ctrl-C ends record (exit status 0) and stops the others (130); so do SIGTERM and SIGHUP.""" % {
+    "checked": _CHECKED
+}
 
 # What each command takes besides its words (--i-have-checked-my-robot: all of them).
 _TAKES = {
@@ -515,17 +522,26 @@ def _move(run, words, options):
 
 def _limp(run, words, options):
     ids = _ids(words, "limp", _UNLOAD_MAX)
-    bus, _ = _bus(run)
+    bus, simulated = _bus(run)
     _answers(bus, run)
+    named = ", ".join(str(i) for i in ids)
+    if not (_CHECKED in options or simulated):
+        run.say("the servos are at", bus.read_positions(ids, run.ms(len(ids))))
+        run.say("this lets servos %s go limp: what they hold up falls" % named)
+        _unchecked(run)
+        return 1
     bus.unload(ids)
     if len(ids) == 1:
         run.say("servo %d is limp: turn it by hand; it holds again when moved" % ids[0])
     else:
-        run.say(
-            "servos %s are limp: turn them by hand; each holds again when moved"
-            % ", ".join(str(i) for i in ids)
-        )
+        run.say("servos %s are limp: turn them by hand; each holds again when moved" % named)
     return 0
+
+
+def _unchecked(run):
+    # What limp and record say without --i-have-checked-my-robot.
+    run.say("nothing went limp: hold the arm (or rest it safely), check that nothing is in its")
+    run.say("way, then add " + _CHECKED)
 
 
 def _wait_for_group(bus, group, until):
@@ -571,7 +587,10 @@ def _group(run, words, options):
             return 1
         print(
             "action group %d runs %s (Ctrl-C stops it)"
-            % (group, "until stopped" if not times else "%d times" % times),
+            % (
+                group,
+                "until stopped" if not times else "once" if times == 1 else "%d times" % times,
+            ),
             flush=True,
         )
         cmd = _wait_for_group(bus, group, None)
@@ -719,10 +738,18 @@ def _record(run, words, options):
     if "--seconds" in options:
         seconds = _number(options["--seconds"], "--seconds", 0.1, 86400)
     _writable(path)
-    bus, _ = _bus(run)
+    bus, simulated = _bus(run)
     robot = _robot(bus, None)
     _answers(bus, run)
     ids = [robot.joints[name].servo_id for name in robot.names]
+    if not (_CHECKED in options or simulated):
+        print("the servos are at", bus.read_positions(ids, run.ms(len(ids))))
+        print(
+            "this lets the joints %s (servos %s) go limp, to be moved by hand, and records "
+            "them into %s; what they hold up falls" % (", ".join(robot.names), ids, path)
+        )
+        _unchecked(run)
+        return 1
     print(
         "the joints %s (servos %s) go limp: move the arm by hand" % (", ".join(robot.names), ids)
     )
@@ -733,9 +760,10 @@ def _record(run, words, options):
     recorder = busservo_record.Recorder(robot, path=path, timeout_ms=run.timeout)
     start = time.monotonic()
     try:
-        while seconds is None or time.monotonic() - start < seconds:
-            recorder.step()  # never waits for the wire
-            time.sleep(0.001)
+        with _ended_as_ctrl_c():
+            while seconds is None or time.monotonic() - start < seconds:
+                recorder.step()  # never waits for the wire
+                time.sleep(0.001)
     except KeyboardInterrupt:
         pass  # the normal end of a recording
     recording = recorder.stop()
@@ -746,13 +774,48 @@ def _record(run, words, options):
     return 0
 
 
+class _ended_as_ctrl_c:
+    """Within it, SIGTERM and SIGHUP (the terminal closed) end the command as Ctrl-C does:
+    a KeyboardInterrupt, so that a recording is saved and the servos are stopped."""
+
+    def __enter__(self):
+        import signal
+
+        self.before = {}
+
+        def interrupt(signum, frame):
+            raise KeyboardInterrupt
+
+        for name in ("SIGTERM", "SIGHUP"):  # (Windows has no SIGHUP)
+            number = getattr(signal, name, None)
+            if number is None:
+                continue
+            try:
+                self.before[number] = signal.signal(number, interrupt)
+            except ValueError:  # not the main thread: as it was
+                pass
+        return self
+
+    def __exit__(self, *exc):
+        import signal
+
+        for number, handler in self.before.items():
+            signal.signal(number, handler)
+        return False
+
+
 def _writable(path):
-    # A recording's FILE: its folder must be there, and it must be no folder itself.
+    # A recording's FILE: its folder must be there, it must be no folder itself, and its
+    # name says its form (anything else, robot.json say, would be replaced by a recording).
     folder = os.path.dirname(path) or "."
     if not os.path.isdir(folder):
         raise _Usage("no folder %s for FILE %s" % (folder, path))
     if os.path.isdir(path):
         raise _Usage("%s is a folder: FILE is the recording's file" % path)
+    if not path.endswith((".rec", ".jsonl")):
+        raise _Usage(
+            "FILE must end in .rec (the compact form) or .jsonl (JSON lines), got %r" % path
+        )
 
 
 def _saved(path, recording, missed):
@@ -835,6 +898,21 @@ def _calibration(path, what):
         raise _Usage("%s: %s" % (what, e))
 
 
+_SIM_FOLLOWER = 6  # --sim's follower without a calibration: the demo's arm, ids 6 more
+
+
+def _moved(joints, offset):
+    # joints {name: Joint}, each on the servo offset ids on.
+    import busservo_motion
+
+    moved = {}
+    for name, joint in joints.items():
+        config = joint.config()
+        config["servo_id"] += offset
+        moved[name] = busservo_motion.Joint(**config)
+    return moved
+
+
 def _teleop(run, words, options):
     import busservo_motion
     import busservo_teleop
@@ -843,13 +921,22 @@ def _teleop(run, words, options):
         raise _Usage("teleop wants LEADER [FOLLOWER]: two ports, or one with both arms on it")
     lpath = options.get("--leader-calibration")
     fpath = options.get("--follower-calibration")
-    if not lpath or not fpath:
+    if not (lpath or fpath) and run.port == "--sim" and words in ([], ["--sim"]):
+        # No arm yet: the demo's arm on servos 1..4 leads the same arm on 7..10.
+        import busservo_board
+
+        lpath, fpath = "the demo's arm", "the demo's arm on servos 7..10"
+        lead = busservo_motion.Robot(None, busservo_board.joints())
+        follow = busservo_motion.Robot(None, _moved(lead.joints, _SIM_FOLLOWER))
+        print("the leader: %s (servos 1..4); the follower: %s" % (lpath, fpath))
+    elif not lpath or not fpath:
         raise _Usage(
             "teleop wants --leader-calibration F1 and --follower-calibration F2 "
-            "(each arm's robot.json)"
+            "(each arm's robot.json; on --sim, neither: the demo's arm)"
         )
-    lead = _calibration(lpath, "--leader-calibration")
-    follow = _calibration(fpath, "--follower-calibration")
+    else:
+        lead = _calibration(lpath, "--leader-calibration")
+        follow = _calibration(fpath, "--follower-calibration")
     path = options.get("--record")
     if path is not None:
         _writable(path)
@@ -902,22 +989,23 @@ def _teleop(run, words, options):
     then = time.monotonic()
     reads = 0
     try:
-        while not teleop.done:
-            teleop.step()  # never waits for the wire
-            now = time.monotonic()
-            if now - then >= _RATE_S:
-                print(
-                    "%.1f cycles a second, %s"
-                    % (
-                        (teleop.reads - reads) / (now - then),
-                        "following"
-                        if teleop.engaged
-                        else "going to the leader's pose at %d degrees/s" % _PLAY_DPS,
-                    ),
-                    flush=True,
-                )
-                then, reads = now, teleop.reads
-            time.sleep(0.0005)
+        with _ended_as_ctrl_c():
+            while not teleop.done:
+                teleop.step()  # never waits for the wire
+                now = time.monotonic()
+                if now - then >= _RATE_S:
+                    print(
+                        "%.1f cycles a second, %s"
+                        % (
+                            (teleop.reads - reads) / (now - then),
+                            "following"
+                            if teleop.engaged
+                            else "going to the leader's pose at %d degrees/s" % _PLAY_DPS,
+                        ),
+                        flush=True,
+                    )
+                    then, reads = now, teleop.reads
+                time.sleep(0.0005)
     except KeyboardInterrupt:
         teleop.stop()
         at = _halt(follower, run)
@@ -946,8 +1034,8 @@ _COMMANDS = {
 
 
 def main(argv=None):
-    """The `busservo` command: returns its exit status (0 done, 1 failed, 2 bad usage,
-    130 stopped by Ctrl-C)."""
+    """The `busservo` command: returns its exit status (0 done, 1 failed or nothing moved
+    for want of --i-have-checked-my-robot, 2 bad usage, 130 stopped by Ctrl-C)."""
     args = list(sys.argv[1:] if argv is None else argv)
     run = None
     try:

@@ -107,10 +107,18 @@ class Recorder:
         self._fed = False  # take() gives it the reads: it makes none of its own
         self._file = None
         self._data = bytearray()  # in RAM: no path, or JSON lines (written at stop())
+        # CPython keeps about 8 KB of writes in its own buffer (some 40 s of samples), lost
+        # if the process is killed: there each piece is flushed to the OS as it is written.
+        # A board's flush may cost a flash erase: its pieces go as MicroPython writes them.
+        self._flush = None  # the file's flush(), on CPython
         if path is not None and not path.endswith(".jsonl"):
             self._file = open(path, "wb")
             self._file.write(MAGIC)
             self._file.write(_header(self.names, self.joints).encode())
+            if _awaitable:
+                self._flush = getattr(self._file, "flush", None)
+            if self._flush:
+                self._flush()
         if limp:
             robot.limp(self.names)
 
@@ -230,6 +238,8 @@ class Recorder:
             piece = memoryview(buf)[:k]  # the last piece, at stop()
         if self._file is not None:
             self._file.write(piece)
+            if self._flush:
+                self._flush()
         else:
             self._data.extend(piece)
         for i in range(w - k):
@@ -248,7 +258,7 @@ class Recorder:
         data = self._data
         if self._file is not None:
             self._file.close()
-            self._file = None
+            self._file = self._flush = None
             recording = Recording.load(self.path)
         else:
             recording = Recording(self.joints, self.names, bytes(data))
@@ -393,8 +403,19 @@ class Recording:
         """The recording save() or a Recorder wrote to path (either form)."""
         with open(path, "rb") as f:
             first = f.readline()
-            if first == MAGIC:
-                names, joints = _joints_of(path, f.readline())
+            if not first:
+                raise ValueError(
+                    "%s is empty: no samples were saved (the recording ended before its "
+                    "first write)" % path
+                )
+            if first == MAGIC or MAGIC.startswith(first):
+                header = f.readline()
+                if not header.endswith(b"\n"):
+                    raise ValueError(
+                        "%s is cut short: it ends before its first sample, within the joints "
+                        "a recording starts with (no samples were saved)" % path
+                    )
+                names, joints = _joints_of(path, header)
                 return Recording(joints, names, f.read())
             names, joints = _joints_of(path, first)
             rec = Recording(joints, names)

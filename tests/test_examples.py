@@ -317,6 +317,53 @@ if __name__ == "__main__":
     unittest.main()
 
 
+class WhatTheySay(unittest.TestCase):
+    def test_record_and_teleop_say_each_second_the_last_one_too(self):
+        # On the simulator they run for 2 s: a line for each second, not the first alone.
+        runs = run_all([(example("record.py"), None), (example("teleop.py"), None)])
+        (ok, out, _), (ok2, out2, _) = runs
+        self.assertTrue(ok and ok2, out + out2)
+        self.assertTrue("  1 s: " in out and "  2 s: " in out, out)
+        self.assertFalse("  3 s: " in out, out)
+        self.assertEqual(out2.count(" cycles a second, "), 2, out2)
+
+    def test_teleop_with_a_follower_on_the_leaders_servos_says_so_alone(self):
+        # follower.json on servos 1 and 8: servo 1 is the leader's too, on the one bus.
+        folder = scratch("teleop")
+        os.mkdir(folder)
+        try:
+            with open(folder + "/follower.json", "w") as f:
+                f.write('{"joints": {"base": {"servo_id": 1}, "shoulder": {"servo_id": 8}}}')
+            ok, out = sh("cd %s && sh %s/boards/unix.sh %s" % (folder, REPO, example("teleop.py")))
+        finally:
+            sh("rm -rf " + folder)
+        self.assertFalse(ok, out)
+        self.assertFalse("Traceback" in out, out)
+        self.assertTrue(
+            out.strip().split("\n")[-1].startswith("on one bus the arms need their own servo"),
+            out,
+        )
+
+    def test_the_teleop_pages_example_runs_on_the_simulator(self):
+        # docs/teleop.md's leader and follower, as written (for 1 s rather than 10).
+        with open("docs/teleop.md") as f:
+            lines = f.read().split("\n")
+        start = lines.index("```python", lines.index("## Leader and follower")) + 1
+        code = "\n".join(lines[start : lines.index("```", start)]).replace("10000", "1000")
+        folder = scratch("teleop-doc")
+        os.mkdir(folder)
+        try:
+            with open(folder + "/doc.py", "w") as f:
+                f.write(code + '\nprint("done:", t.reads, "reads,", t.moves, "moves")\n')
+            ok, out = sh("cd %s && sh %s/boards/unix.sh doc.py" % (folder, REPO))
+        finally:
+            sh("rm -rf " + folder)
+        self.assertTrue(ok, out)
+        self.assertFalse("Traceback" in out, out)
+        reads, moves = [int(x) for x in out.split("done: ")[1].split()[0:3:2]]
+        self.assertTrue(reads > 5 and moves > 5, out)
+
+
 class WebPanel(unittest.TestCase):
     # examples/web_panel.py's command line on the unix port (the panel itself: test_web).
     def run_panel(self, args, seconds=3):
@@ -335,6 +382,8 @@ class WebPanel(unittest.TestCase):
             ("--password short", "--password wants 8 or more characters, got 5"),
             ("--port=abc", "--port wants a number from 1 to 65535, got 'abc'"),
             ("--port 0", "--port wants a number from 1 to 65535, got '0'"),
+            ("--password test-pw-1 --port", "--port wants a value: --port N"),  # not 8080
+            ("--port 8080 --password", "--password wants a value: --password P"),
         ):
             ok, out = self.run_panel(args)
             self.assertFalse(ok, args)

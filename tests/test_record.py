@@ -666,5 +666,38 @@ class Heap(Tidy):
         self.assertEqual(rec.missed, 0)
 
 
+class Files(Tidy):
+    def test_each_piece_reaches_the_os_as_it_is_written(self):
+        # A recording killed (SIGKILL, the power of a computer) keeps what was written: on
+        # CPython its buffer held some 40 s of samples, and a file cut then had 0 bytes.
+        w, bus = world()
+        path = scratch("record") + ".rec"
+        rec = br.Recorder(chain(bus), path=path)
+        try:
+            header = os.stat(path)[6]
+            self.assertTrue(header > len(br.MAGIC), header)  # the joints' line, at once
+            record(w, rec, 3000)  # 8 bytes a sample for 6 joints: a piece every 32 reads
+            self.assertTrue(os.stat(path)[6] >= header + br.PIECE)
+            cut = br.Recording.load(path)  # what the OS has, read while recording
+            self.assertTrue(len(cut) >= br.PIECE // 8 - 2, len(cut))
+        finally:
+            rec.stop()
+            os.remove(path)
+
+    def test_an_empty_or_cut_file_says_so_in_words(self):
+        path = scratch("record") + ".rec"
+        try:
+            with open(path, "wb"):
+                pass
+            raises(lambda: br.Recording.load(path), path + " is empty: no samples were saved")
+            for cut in (br.MAGIC[:3], br.MAGIC, br.MAGIC + b'{"names": ["j1"], "joi'):
+                with open(path, "wb") as f:
+                    f.write(cut)
+                text = raises(lambda: br.Recording.load(path), path + " is cut short")
+                self.assertFalse("Expecting" in text, text)
+        finally:
+            os.remove(path)
+
+
 if __name__ == "__main__":
     unittest.main()
