@@ -27,6 +27,9 @@ MAGIC: Final = b"BSREC1\n"
 samples."""
 PIECE: Final = 256
 """Bytes a Recorder writes to its file at a time, between a reply and the next request."""
+HALT_MS: int
+"""A playback stopped by Ctrl-C in wait() on a move's way: the servos go where they are
+within this."""
 
 class Recorder:
     """A recording under way: step() from the loop, or await it."""

@@ -40,6 +40,8 @@ from busservo_motion import Robot
 
 PAGE: str
 """The page's file: busservo_web.html.gz beside this module (else in /lib)."""
+HALT_MS: int
+"""A move stopped on its way (Panel.halt()): the joints go where they are within this."""
 PARTS: tuple[tuple[Any, ...], ...]
 """The parts serve() plugs in by default: (module, None: at once; or NAME: when /api/NAME is
 first asked for, or, with a condition, when condition(panel) holds)."""
@@ -113,6 +115,8 @@ class Panel:
     none)."""
     options: dict[str, Any]
     """What the program gave serve() for the parts (its **options), as {name: value}."""
+    halting: Any
+    """The task of the last halt() (None before one), awaited as serve() ends."""
     parts: dict[str, Any]
     """{module: its part} of the parts plugged in."""
     robots: int
@@ -161,6 +165,10 @@ class Panel:
     def pose(self, pose: Any, what: str) -> dict[str, float]:
         """A pose {joint: degrees}, checked (known joints, within their limits); else Refused
         (400) naming what."""
+    def halt(self, names: list[str]) -> None:
+        """Send these joints where they are, once a read of them has come (a move stopped on
+        its way: a sequence's pose, a replay's first pose), unless something else is ordered
+        meanwhile (a stream, a limp, a STOP). Never waits: a task reads (halting)."""
     async def positions(self, ids: list[int]) -> dict[int, int | None]:
         """{servo_id: position} of ids, read now without blocking: the driver's
         BusServo.ask(), a step every 5 ms, so the panel's loop, the stream and the other
