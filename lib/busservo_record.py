@@ -143,20 +143,8 @@ class Recorder:
             self.missed += 1
             return False
         self._query = None
-        now = time.ticks_ms()
-        positions = self.bus.positions
-        ids = self._ids
-        got = self._got
-        for i in range(self._n):
-            p = positions.get(ids[i])
-            if p is None:  # a servo that does not answer: no sample
-                self.missed += 1
-                self._quiet = True
-                return False
-            got[i] = p
         self._quiet = True
-        self._keep(now)
-        return True
+        return self._sample(time.ticks_ms(), self.bus.positions)
 
     def take(self, ticks_ms, positions):
         """A read made elsewhere (a busservo_teleop.Teleop's of its leader): positions
@@ -170,17 +158,24 @@ class Recorder:
         if positions is None:
             self.missed += 1
             return False
+        if not self._sample(ticks_ms, positions):
+            return False
+        if self._w >= PIECE:
+            self._write()  # between a reply and the next request: nothing is due
+        return True
+
+    def _sample(self, now, positions):
+        # Keep a read's positions {servo_id: position}, taken at now. True if kept; a servo
+        # that did not answer makes no sample, counted in missed.
         ids = self._ids
         got = self._got
         for i in range(self._n):
             p = positions.get(ids[i])
-            if p is None:  # a servo that does not answer: no sample
+            if p is None:
                 self.missed += 1
                 return False
             got[i] = p
-        self._keep(ticks_ms)
-        if self._w >= PIECE:
-            self._write()  # between a reply and the next request: nothing is due
+        self._keep(now)
         return True
 
     def _keep(self, now):
