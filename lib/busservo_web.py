@@ -183,7 +183,7 @@ def need(body, key, kind, low=None, high=None, what=None):
 
 
 # The status lines the panel answers with, one a line (one bytes object: a dict of them
-# would keep 384 bytes more of RAM).
+# keeps 352 bytes more of RAM, on a 32-bit port from .mpy).
 _STATUS = (
     b"200 OK\n204 No Content\n400 Bad Request\n401 Unauthorized\n404 Not Found\n409 Conflict\n"
     b"413 Payload Too Large\n415 Unsupported Media Type\n429 Too Many Requests\n"
