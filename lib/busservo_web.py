@@ -58,7 +58,9 @@
 #                                       its keys to the state; tick(read) each turn of the
 #                                       loop (read: positions came since the last); still(
 #                                       halt) stops what it drives (halt: a sequence's pose
-#                                       on the way too); close() is awaited as serve() ends
+#                                       on the way too); free() lets go of what it can make
+#                                       again (another part needs the RAM); close() is
+#                                       awaited as serve() ends
 #   panel.order(by)                     a new order, from part `by`: every other part's
 #                                       still(); what began before it (a read) is void.
 #                                       Returns its number: panel.orders is the last's
@@ -72,6 +74,10 @@
 #                                       they are, once read, unless something is ordered
 #                                       meanwhile (never waits: a task, panel.halting)
 #   panel.adopt(robot)                  drive another robot (a calibration just saved)
+#   panel.load(name), .unload(name)     import a module a part needs only when used (the
+#                                       heap collected first), and let it go again
+#   panel.free(by)                      every part but by: free(); then a collection (a
+#                                       calibration makes room: the jog lets its arm go)
 #   panel.failed(e)                     show an error on the page while it lasts
 #   panel.robot, .bus, .path            the robot, its bus, the calibration file
 #   panel.to, .limp, .armed             targets shown (name: degrees), joints let go, the
@@ -86,8 +92,10 @@
 #                                       (busservo_web_record's teleop reads "leader")
 #   Refused(status, why), need(body, key, kind, low, high, what): refusals, and checks
 import asyncio
+import gc
 import json
 import os
+import sys
 import time
 
 import busservo_motion as bm
@@ -212,13 +220,16 @@ class _Conn:
     # (MicroPython's readline() has no limit of its own), then ValueError: a 400. It notes
     # whether a byte came (a client that said something is told why it is closed) and
     # whether a write went out (until then a failure can still be answered 503).
-    def __init__(self, reader, writer):
+    def __init__(self, reader, writer, due):
         self._reader = reader
         self._writer = writer
         self._buf = b""
         self._left = _REQUEST
         self.heard = False  # a byte has come
         self.sent = False  # a write has gone out whole: the status line first
+        self.reading = True  # its request is being read (then answered)
+        self.due = due  # ticks_ms by which the request must be in (then answered)
+        self.cut = None  # what it is told if the panel cuts it (pushed out, too slow)
 
     def client(self):
         # Who is asking: the address the connection came from (its port left out).
@@ -378,15 +389,16 @@ class Panel:
         self._parts = []
         self._later = {}  # {NAME: the module of a part to plug in when /api/NAME is asked for}
         self._lazy = []  # (module, condition) of the parts not plugged in yet
+        self._loaded = []  # the modules load() imported
         self.parts = {}  # {module: its part}, as attach() returns it
         self._asking = asyncio.Lock()  # one query of the panel's on the bus at a time
         now = time.ticks_ms()
         self._seen = time.ticks_add(now, -_OPEN_MS)  # any page, last
         self._minute = now
         self._read = self._battery = now
-        # Connections: (task, _Conn) of the requests being read, oldest first; how many
-        # requests are being answered.
-        self._reading = []
+        # Connections: (task, _Conn) of the requests being read or answered, oldest first
+        # (the loop cuts those past their time); how many requests are being answered.
+        self._conns = []
         self._clients = 0
         for part in parts:
             self.plug(*part)
@@ -408,7 +420,34 @@ class Panel:
             if condition:
                 self._lazy.append((module, condition))
         elif module not in self.parts:
-            self.parts[module] = __import__(module).attach(self)
+            self.parts[module] = self.load(module).attach(self)
+
+    def load(self, name):
+        """The module name, imported now if it is not yet, the heap collected first (its
+        code then fills the holes that what came before left: on a 32-bit port from .mpy,
+        the panel without an arm serves within 3 KB less heap). How the core plugs parts
+        in, and how a part imports what it needs only when used; unload() lets it go."""
+        module = sys.modules.get(name)
+        if module is None:
+            gc.collect()
+            module = __import__(name)
+            self._loaded.append(name)
+        return module
+
+    def unload(self, name):
+        """Let go of module name, if load() imported it (the program did not): its RAM is
+        free once nothing holds what it made, and load() imports it again."""
+        if name in self._loaded:
+            self._loaded.remove(name)
+            del sys.modules[name]
+
+    def free(self, by):
+        """Every part but by lets go of what it can make again (its free()), and the heap
+        is collected: for a part that takes much RAM (a calibration)."""
+        for part in self._parts:
+            if part is not by and hasattr(part, "free"):
+                part.free()
+        gc.collect()
 
     def saved(self, key):
         """True if the calibration file (path) holds key (as {"key": ...})."""
@@ -607,6 +646,10 @@ class Panel:
                 break
             read = read or cmd == _POSITIONS
         now = time.ticks_ms()
+        conns = self._conns
+        for i in range(len(conns) - 1, -1, -1):  # not in, or not answered, in time: cut
+            if time.ticks_diff(now, conns[i][1].due) >= 0:
+                self._cut(conns[i], _LATE if conns[i][1].reading else _FAILED)
         if self.armed is not None:
             for token, seen, _ in self._sessions:
                 if token == self.armed and time.ticks_diff(now, seen) > _DEAD_MS:
@@ -642,38 +685,36 @@ class Panel:
     async def handle_request(self, reader, writer):
         """Answer the request of one connection, then close it (serve()'s server calls
         this for each)."""
-        conn = None
+        conn = mine = None
         try:
-            conn = _Conn(reader, writer)
-            reading = self._reading
-            if len(reading) >= _CLIENTS:
-                # A request sent whole is read within a few ms: the ones still reading
-                # when more come are the silent, then the slow.
-                out = 0
-                for i in range(len(reading)):
-                    if not reading[i][1].heard:
-                        out = i
-                        break
-                reading.pop(out)[0].cancel()
+            conn = _Conn(reader, writer, time.ticks_add(time.ticks_ms(), _HEAD_MS))
+            conns = self._conns
+            # A request sent whole is read within a few ms: the ones still reading when
+            # more come are the silent, then the slow.
+            out = None
+            reading = 0
+            for c in conns:
+                if c[1].reading:
+                    reading += 1
+                    if out is None or out[1].heard and not c[1].heard:
+                        out = c
+            if reading >= _CLIENTS:
+                self._cut(out, _BUSY)
             mine = (asyncio.current_task(), conn)
-            reading.append(mine)
+            conns.append(mine)
             try:
-                request = await asyncio.wait_for_ms(_request(conn), _HEAD_MS)
-            except asyncio.TimeoutError:
+                request = await _request(conn)
+            except asyncio.CancelledError:  # pushed out by a newer connection, or too slow
+                if conn.cut is None:
+                    raise  # not the panel's doing: serve() is ending
                 if conn.heard:
-                    await conn.write(_LATE)
-                return
-            except asyncio.CancelledError:  # pushed out by a newer connection
-                if conn.heard:
-                    await conn.write(_BUSY)
+                    await conn.write(conn.cut)
                 return
             except Refused as e:  # too large
                 request = e
             except (ValueError, UnicodeError):  # malformed, cut short, or too long
                 request = Refused(400, "bad request")
-            finally:
-                if mine in reading:
-                    reading.remove(mine)
+            conn.reading = False
             if self._clients >= _CLIENTS and (
                 self._clients >= 2 * _CLIENTS
                 or type(request) is not tuple
@@ -681,21 +722,32 @@ class Panel:
             ):
                 await conn.write(_BUSY)
                 return
+            conn.due = time.ticks_add(time.ticks_ms(), _CLIENT_MS)
             self._clients += 1
             try:
-                await asyncio.wait_for_ms(self._dispatch(conn, request), _CLIENT_MS)
+                await self._dispatch(conn, request)
             finally:
                 self._clients -= 1
-        except Exception as e:  # out of memory, say, or an answer over _CLIENT_MS; an
-            # OSError is the client gone (CPython's TimeoutError is an OSError too)
-            gone = isinstance(e, OSError) and not isinstance(e, asyncio.TimeoutError)
+        except (Exception, asyncio.CancelledError) as e:  # out of memory, say, or an answer
+            # over _CLIENT_MS (cut); an OSError is the client gone
+            if type(e) is asyncio.CancelledError and (conn is None or conn.cut is None):
+                raise  # not the panel's doing: serve() is ending
+            gone = isinstance(e, OSError)
             if not (gone or conn and conn.sent):
                 try:
                     await writer.awrite(_FAILED)
                 except Exception:
                     pass
         finally:
+            if mine in self._conns:
+                self._conns.remove(mine)
             await _close(writer)
+
+    def _cut(self, c, answer):
+        # End connection c = (task, _Conn), which is told answer if it said something.
+        self._conns.remove(c)
+        c[1].cut = answer
+        c[0].cancel()
 
     async def _dispatch(self, conn, request):
         # Answer a request: the route's answer, or why not ({"error": why}).

@@ -144,7 +144,9 @@ class Panel:
         Refused; a POST's body is the dict of its JSON, a GET's is not read); state(out,
         token) adds its keys to the state; tick(read), each turn of the loop (read: positions
         came since the last); still(halt), when something else is ordered or the panel
-        disarms (halt: a sequence's pose on the way too); await close(), as serve() ends."""
+        disarms (halt: a sequence's pose on the way too); free(), when another part needs
+        the RAM (a calibration): let go of what it can make again; await close(), as serve()
+        ends."""
     def plug(
         self,
         module: str,
@@ -154,6 +156,16 @@ class Panel:
         """Plug in the part of module (module.attach(panel), which returns the part): now, or
         with route (NAME, or a tuple of them), when /api/NAME is first asked for, or
         condition(panel) holds (now, or once a calibration is saved)."""
+    def load(self, name: str) -> Any:
+        """The module name, imported now if it is not yet, the heap collected first (its code
+        then fills the holes that what came before left). How the core plugs parts in, and
+        how a part imports what it needs only when used; unload() lets it go."""
+    def unload(self, name: str) -> None:
+        """Let go of module name, if load() imported it (the program did not): its RAM is
+        free once nothing holds what it made, and load() imports it again."""
+    def free(self, by: Any) -> None:
+        """Every part but by lets go of what it can make again (its free()), and the heap is
+        collected: for a part that takes much RAM (a calibration)."""
     def saved(self, key: str) -> bool:
         """True if the calibration file (path) holds key (as {"key": ...})."""
     def order(self, by: Any = None, halt: bool = False) -> int:

@@ -35,6 +35,7 @@ class Calibrate:
         if panel.busy and panel.busy[0] is self:
             panel.busy = None
         panel.read_ms = self._read_ms
+        panel.unload("busservo_calibrate")  # (4 KB) loaded again by the next start
 
     # What the core calls.
 
@@ -70,10 +71,8 @@ class Calibrate:
 
     def _start(self):
         panel = self.panel
-        try:
-            import busservo_calibrate
-        except ImportError:
-            raise web.Refused(500, "busservo_calibrate is missing: install it beside busservo_web")
+        panel.order(self)  # the stream, a jog or a sequence ends
+        panel.busy = (self, _BUSY)  # nothing else drives (the jog says so, its arm let go)
         robot = panel.robot
         ids = {}
         kinds = {}
@@ -82,14 +81,19 @@ class Calibrate:
             ids[name] = joint.servo_id
             if joint.kind != bm.BUS:
                 kinds[name] = joint.kind
-        cal = busservo_calibrate.Calibration(panel.bus, ids, kinds)
-        panel.order(self)  # the stream, a jog or a sequence ends
+        try:
+            panel.free(self)  # room for the calibration's code: the jog's arm (10 KB)
+            self.cal = panel.load("busservo_calibrate").Calibration(panel.bus, ids, kinds)
+        except Exception as e:
+            self._end()
+            if isinstance(e, ImportError):
+                why = "busservo_calibrate is missing: install it beside busservo_web"
+                raise web.Refused(500, why)
+            raise
         panel.to = {}
-        cal.limp()  # every joint: the person holds the arm
+        self.cal.limp()  # every joint: the person holds the arm
         panel.limp = True
-        panel.busy = (self, _BUSY)
         panel.read_ms = READ_MS
-        self.cal = cal
         self.news = {"step": "rest", "seen": None, "why": None, "joints": None}
 
     # The route.

@@ -45,9 +45,7 @@ class Jog:
             self.no_arm = "no links in %s: calibrate, and give the links" % panel.path
             return None
         try:
-            import busservo_arm
-
-            return busservo_arm.Arm.load(panel.robot, panel.path)
+            return panel.load("busservo_arm").Arm.load(panel.robot, panel.path)
         except ImportError:
             self.no_arm = "busservo_arm is missing: install it beside busservo_web"
         except (ValueError, TypeError) as e:
@@ -55,9 +53,11 @@ class Jog:
         return None
 
     def _arm(self):
-        # The arm, made again from the file when the panel has a new robot (calibrated).
-        if self.robots != self.panel.robots:
-            self.robots = self.panel.robots
+        # The arm, made again from the file when the panel has a new robot (calibrated), or
+        # once free() let it go, when no other part holds the joints.
+        panel = self.panel
+        if self.robots != panel.robots and not panel.busy:
+            self.robots = panel.robots
             self.arm = self._load()
         return self.arm
 
@@ -88,6 +88,16 @@ class Jog:
             self.line.stop()
             self.line = None
             self.panel.robot.hold()
+
+    def free(self):
+        # A calibration begins: the arm the file made, and busservo_arm (10 KB), are let go
+        # while it holds the joints, and made again then, from the new calibration.
+        panel = self.panel
+        if self.arm is not None and self.arm is not panel.arm:
+            self.still(False)
+            self.arm = self.robots = None
+            self.no_arm = panel.busy[1] if panel.busy else "let go: ask again"
+            panel.unload("busservo_arm")
 
     def _along_the_edge(self, arm, goal):
         # A jog a hair past the reach (the arm stretched: from its rest pose, any step but

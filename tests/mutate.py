@@ -934,8 +934,8 @@ MUTANTS = {
         ),
         (
             "push-out-the-talkers",
-            "                    if not reading[i][1].heard:",
-            "                    if reading[i][1].heard:",
+            "                    if out is None or out[1].heard and not c[1].heard:",
+            "                    if out is None or not out[1].heard and c[1].heard:",
             "silent connections push out the page's request on its way",
         ),
         (
@@ -984,8 +984,8 @@ MUTANTS = {
         ),
         (
             "slow-request-no-408",
-            "                if conn.heard:\n                    await conn.write(_LATE)",
-            "                if False:\n                    await conn.write(_LATE)",
+            "                self._cut(conns[i], _LATE if conns[i][1].reading else _FAILED)",
+            '                self._cut(conns[i], b"" if conns[i][1].reading else _FAILED)',
             "a request too slow is closed with no answer: the page cannot tell why",
         ),
         (
@@ -996,14 +996,14 @@ MUTANTS = {
         ),
         (
             "pushed-out-no-503",
-            "                if conn.heard:\n                    await conn.write(_BUSY)",
-            "                if False:\n                    await conn.write(_BUSY)",
+            "                self._cut(out, _BUSY)",
+            '                self._cut(out, b"")',
             "a request pushed out by newer ones is closed with no answer",
         ),
         (
             "never-pushed-out",
-            "                reading.pop(out)[0].cancel()",
-            "                pass",
+            "            if reading >= _CLIENTS:\n                self._cut(out, _BUSY)",
+            "            if False:\n                self._cut(out, _BUSY)",
             "connections that say nothing are never pushed out: a page waits behind them",
         ),
         (
@@ -1026,8 +1026,8 @@ MUTANTS = {
         ),
         (
             "answer-unbounded",
-            "                await asyncio.wait_for_ms(self._dispatch(conn, request), _CLIENT_MS)",
-            "                await self._dispatch(conn, request)",
+            "            conn.due = time.ticks_add(time.ticks_ms(), _CLIENT_MS)",
+            "            conn.due = time.ticks_add(time.ticks_ms(), 1000 * _CLIENT_MS)",
             "an answer that stalls (a client that reads nothing) holds its place for ever",
         ),
         (
@@ -1376,14 +1376,26 @@ MUTANTS = {
             "after a jog along the edge, the next jog starts from the step asked, out of reach",
         ),
         (
-            "jog-not-reloaded-on-a-new-robot",
-            "        if self.robots != self.panel.robots:",
-            "        if False:",
-            "after a calibration saved, the jog drives the old robot's arm (its old trims)",
+            "jog-reloaded-while-calibrating",
+            "        if self.robots != panel.robots and not panel.busy:",
+            "        if self.robots != panel.robots:",
+            "a calibration under way keeps busservo_arm's 10 KB beside its own: the heap runs out",
+        ),
+        (
+            "jog-arm-kept-while-calibrating",
+            "            self.arm = self.robots = None",
+            "            self.robots = None",
+            "a calibration under way keeps the jog's arm beside its own code: the heap runs out",
         ),
     ],
     # busservo_web_calibrate: the calibration page (was in busservo_web_arm, no mutants).
     "busservo_web_calibrate": [
+        (
+            "calibration-code-kept",
+            '        panel.unload("busservo_calibrate")',
+            "        pass",
+            "busservo_calibrate's 4 KB stay once a calibration is over, beside the jog's arm",
+        ),
         (
             "calibration-not-busy",
             "        panel.busy = (self, _BUSY)",

@@ -2162,6 +2162,32 @@ class AfterTheSplit(Tidy):
 
         on_arm(scenario)
 
+    def test_a_calibration_lets_the_jogs_arm_go_and_after_it_the_jog_is_back(self):
+        # Its RAM is the calibration's (an ESP32's heap holds the one or the other): while a
+        # calibration is under way the jog's arm and busservo_arm are let go, and the state
+        # says why there is no jog; once it ends, busservo_calibrate is let go and the jog is
+        # back. As on a board, the panel imports both itself.
+        async def scenario(port, world, robot, path):
+            token = await armed(port)
+            self.assertTrue((await state(port, token))["arm"])
+            self.assertTrue("busservo_arm" in sys.modules)
+            status, reply = await http(port, "POST", "/api/calibrate", {"step": "start"}, token)
+            self.assertEqual((status, reply.get("arm")), (200, False), reply)
+            self.assertIn("a calibration is under way", reply["no_arm"])
+            self.assertFalse("busservo_arm" in sys.modules)
+            self.assertTrue("busservo_calibrate" in sys.modules)
+            status, reply = await http(port, "POST", "/api/jog", {"axis": "z", "by": -5}, token)
+            self.assertEqual(status, 409, reply)
+            status, reply = await http(port, "POST", "/api/calibrate", {"step": "cancel"}, token)
+            self.assertEqual((status, reply.get("arm")), (200, True), reply)
+            self.assertFalse("busservo_calibrate" in sys.modules)
+            status, reply = await http(port, "POST", "/api/jog", {"axis": "z", "by": -5}, token)
+            self.assertEqual(status, 200, reply)
+
+        for name in ("busservo_arm", "busservo_calibrate"):
+            sys.modules.pop(name, None)  # (another test's panel, or this process, had them)
+        on_arm(scenario)
+
 
 class Parts(Tidy):
     # The core and its parts: the worked example of docs/panel.md plugs in, the core imports
