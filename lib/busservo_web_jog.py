@@ -57,8 +57,8 @@ class Jog:
         # once free() let it go, when no other part holds the joints.
         panel = self.panel
         if self.robots != panel.robots and not panel.busy:
+            self.arm = self._load()  # (out of memory: tried again the next time)
             self.robots = panel.robots
-            self.arm = self._load()
         return self.arm
 
     # What the core calls.

@@ -2188,6 +2188,28 @@ class AfterTheSplit(Tidy):
             sys.modules.pop(name, None)  # (another test's panel, or this process, had them)
         on_arm(scenario)
 
+    def test_a_jog_whose_arm_ran_out_of_memory_to_load_loads_it_the_next_time(self):
+        # An ESP32's heap at its edge: the arm made again after a calibration fails once
+        # (503); the next request makes it, and the jog goes on.
+        async def scenario(port, world, robot, path):
+            token = await armed(port)
+            await http(port, "POST", "/api/calibrate", {"step": "start"}, token)
+            panel = _panels[-1]
+            load = panel.load
+
+            def short(name):
+                panel.load = load
+                raise MemoryError
+
+            panel.load = short
+            status, reply = await http(port, "POST", "/api/calibrate", {"step": "cancel"}, token)
+            self.assertEqual(status, 503, reply)
+            self.assertTrue((await state(port, token))["arm"])
+            status, reply = await http(port, "POST", "/api/jog", {"axis": "z", "by": -5}, token)
+            self.assertEqual(status, 200, reply)
+
+        on_arm(scenario)
+
 
 class Parts(Tidy):
     # The core and its parts: the worked example of docs/panel.md plugs in, the core imports
