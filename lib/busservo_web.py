@@ -76,6 +76,8 @@
 #   panel.adopt(robot)                  drive another robot (a calibration just saved)
 #   panel.load(name), .unload(name)     import a module a part needs only when used (the
 #                                       heap collected first), and let it go again
+#   panel.unplug(module)                take a part plugged in when first asked for out,
+#                                       once done (plugged in again when next asked for)
 #   panel.free(by)                      every part but by: free(); then a collection (a
 #                                       calibration makes room: the jog lets its arm go)
 #   panel.failed(e)                     show an error on the page while it lasts
@@ -408,7 +410,7 @@ class Panel:
     def add(self, part):
         """Answer /api/NAME with part's get_NAME() and post_NAME(), and call its state(),
         tick(), still() and close(), those it has (this module's header says how)."""
-        self._parts.append(part)
+        self._parts = self._parts + [part]  # (a new list, as unplug() makes)
 
     def plug(self, module, route=None, condition=None):
         """Plug in the part of module (its attach(self)): now, or with route (NAME), when
@@ -421,6 +423,15 @@ class Panel:
                 self._lazy.append((module, condition))
         elif module not in self.parts:
             self.parts[module] = self.load(module).attach(self)
+
+    def unplug(self, module):
+        """Take out the part of module, plugged in when first asked for, once it is done
+        (the calibration page, its calibration over): its module is let go (unload()), and
+        it is plugged in again when next asked for."""
+        part = self.parts.pop(module, None)
+        if part is not None:  # a new list: a loop over the parts (order()) goes on as it was
+            self._parts = [p for p in self._parts if p is not part]
+            self.unload(module)
 
     def load(self, name):
         """The module name, imported now if it is not yet, the heap collected first (its
@@ -771,7 +782,7 @@ class Panel:
                 handler = None
                 if name.isalpha() and method in ("GET", "POST"):
                     if name in self._later:  # a part plugged in when first asked for
-                        self.plug(self._later.pop(name))  # (plugged in once: by any name)
+                        self.plug(self._later[name])  # (once: by any name, till unplugged)
                     attr = "%s_%s" % (method.lower(), name)
                     handler = getattr(self, "_" + attr, None)  # the core's own
                     for part in self._parts:

@@ -36,6 +36,7 @@ class Calibrate:
             panel.busy = None
         panel.read_ms = self._read_ms
         panel.unload("busservo_calibrate")  # (4 KB) loaded again by the next start
+        panel.unplug(__name__)  # (3 KB) this part too, until next asked for
 
     # What the core calls.
 

@@ -82,6 +82,29 @@ HEAPS = {  # KB, the first tried first
 }
 
 
+# The arm of the heap's arm case: its joints, and its links (mm).
+ARM = {
+    "base": bm.Joint(1),
+    "shoulder": bm.Joint(2, limits=(-90, 90)),
+    "elbow": bm.Joint(3, limits=(-120, 120)),
+    "wrist": bm.Joint(4, limits=(-120, 120)),
+}
+LINKS = {"base_height": 70, "upper_arm": 105, "forearm": 98, "hand": 150}
+
+
+class Unplugged:
+    """A UART with nothing on it: the arm's Robot, to save() its joints."""
+
+    def any(self):
+        return 0
+
+    def readinto(self, buf, n=None):
+        return None
+
+    def write(self, buf, off=0, n=None):
+        return 0
+
+
 def frame_ms(n):
     """A CMD_SERVO_MOVE of n servos on the wire at 9600 baud: 3n + 7 bytes of 10 bits."""
     return (3 * n + 7) * 10 / 9.6
@@ -426,6 +449,9 @@ def board(folder, heap, port, watch=False, arm=False):
     an arm's, and one page jogging and calibrating): (what went wrong, what the board
     printed)."""
     log = folder + ".log"
+    if arm:  # the arm's joints, and its links, in the panel's calibration file
+        robot = bm.Robot(busservo.BusServo(Unplugged()), ARM)
+        robot.save(folder + "/robot.json", links=LINKS)
     pid = start(
         "MICROPYPATH=.frozen:%s %s -X heapsize=%dK tests/bench_web_board.py %d%s%s"
         % (

@@ -6,11 +6,11 @@
 #
 # The robot of examples/web_panel.py on a stand-in for the UART: a controller that takes
 # moves and answers position and battery queries a 9600-baud line's time later (as small as
-# a board's UART: the figure is the panel's). With "arm FILE" after PORT, an arm's four
-# joints instead, FILE (which it writes) the calibration file that gives the panel their
-# links: it jogs, and calibrates. It prints "serving" once it listens; with "watch" after
-# PORT, it also prints "held N" each time the RAM in use, collected every 20 ms, is more than
-# ever before.
+# a board's UART: the figure is the panel's). With "arm FILE" after PORT, the joints that
+# FILE holds (an arm's, written by tests/bench_web.py: Robot.save() with links) instead, FILE
+# the panel's calibration file: it jogs, and calibrates. It prints "serving" once it
+# listens; with "watch" after PORT, it also prints "held N" each time the RAM in use,
+# collected every 20 ms, is more than ever before.
 import asyncio
 import gc
 import sys
@@ -77,28 +77,16 @@ async def watch():
 
 
 async def main(port, watching, path):
-    if path:
-        robot = bm.Robot(
-            busservo.BusServo(Line()),
-            {
-                "base": bm.Joint(1),
-                "shoulder": bm.Joint(2, limits=(-90, 90)),
-                "elbow": bm.Joint(3, limits=(-120, 120)),
-                "wrist": bm.Joint(4, limits=(-120, 120)),
-            },
-        )
-        links = {"base_height": 70, "upper_arm": 105, "forearm": 98, "hand": 150}
-        robot.save(path, links=links)
-    else:
-        robot = bm.Robot(
-            busservo.BusServo(Line()),
-            {
-                "base": bm.Joint(1),
-                "shoulder": bm.Joint(2, limits=(-90, 90)),
-                "elbow": bm.Joint(3, limits=(-90, 90)),
-                "claw": bm.Joint(4, limits=(0, 60)),
-            },
-        )
+    robot = path and bm.Robot.load(busservo.BusServo(Line()), path)
+    robot = robot or bm.Robot(
+        busservo.BusServo(Line()),
+        {
+            "base": bm.Joint(1),
+            "shoulder": bm.Joint(2, limits=(-90, 90)),
+            "elbow": bm.Joint(3, limits=(-90, 90)),
+            "claw": bm.Joint(4, limits=(0, 60)),
+        },
+    )
     if watching:
         asyncio.create_task(watch())
     server = asyncio.create_task(busservo_web.serve(robot, "bench-pw-32", port, path=path))
@@ -107,5 +95,5 @@ async def main(port, watching, path):
     await server
 
 
-arm = sys.argv.index("arm") + 1 if "arm" in sys.argv else 0
-asyncio.run(main(int(sys.argv[1]), "watch" in sys.argv[2:], arm and sys.argv[arm]))
+arm = "arm" in sys.argv and sys.argv[sys.argv.index("arm") + 1]
+asyncio.run(main(int(sys.argv[1]), "watch" in sys.argv[2:], arm))

@@ -2183,8 +2183,16 @@ class AfterTheSplit(Tidy):
             self.assertFalse("busservo_calibrate" in sys.modules)
             status, reply = await http(port, "POST", "/api/jog", {"axis": "z", "by": -5}, token)
             self.assertEqual(status, 200, reply)
+            # The calibration page's part too; it comes back when next asked for.
+            self.assertFalse("busservo_web_calibrate" in sys.modules)
+            status, reply = await http(port, "POST", "/api/calibrate", {"step": "start"}, token)
+            self.assertEqual(status, 200, reply)
+            self.assertTrue("cal" in reply)
+            status, reply = await http(port, "POST", "/api/calibrate", {"step": "rest"}, token)
+            self.assertEqual(status, 200, reply)
+            self.assertEqual(reply["cal"]["step"], "sweep")
 
-        for name in ("busservo_arm", "busservo_calibrate"):
+        for name in ("busservo_arm", "busservo_calibrate", "busservo_web_calibrate"):
             sys.modules.pop(name, None)  # (another test's panel, or this process, had them)
         on_arm(scenario)
 
