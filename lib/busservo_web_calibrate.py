@@ -1,7 +1,9 @@
 # busservo_web_calibrate: the calibration page, a part of busservo_web, loaded when a
 # page first asks for it (it and busservo_calibrate cost a panel that never calibrates no
 # RAM). busservo_calibrate's three steps by hand, a request each, the positions they need
-# read as all the panel's are, through the driver's ask(), never waiting on the wire.
+# read as all the panel's are, through the driver's ask(), never waiting on the wire. A
+# calibration makes room as it starts (the jog lets its arm go), and lets go of
+# busservo_calibrate and of this part as it ends: a board's heap holds the one or the other.
 #
 #   POST /api/calibrate {"step": "start"|"rest"|"nudge"|"check"|"save"|"home"|"cancel"}
 #        ("save" may give "links" {name: mm}; "home" needs "confirm": true) -> the state
