@@ -393,7 +393,9 @@ class Panel:
         self._lazy = []  # (module, condition) of the parts not plugged in yet
         self._loaded = []  # the modules load() imported
         self.parts = {}  # {module: its part}, as attach() returns it
-        self._asking = asyncio.Lock()  # one query of the panel's on the bus at a time
+        # One query of the panel's on the bus at a time: True while one is (a flag, not an
+        # asyncio.Lock: the lock's module would keep 448 bytes more of a board's heap).
+        self._asking = False
         now = time.ticks_ms()
         self._seen = time.ticks_add(now, -_OPEN_MS)  # any page, last
         self._minute = now
@@ -502,10 +504,15 @@ class Panel:
         every few ms, while the loop, the stream and the other pages go on. One such query
         at a time; raises OSError(ETIMEDOUT) as the driver's queries do."""
         bus = self.bus
-        async with self._asking:
+        while self._asking:  # another's: this one waits its turn
+            await asyncio.sleep_ms(_ASK_MS)
+        self._asking = True
+        try:
             for _ in bus.ask(ids):
                 await asyncio.sleep_ms(_ASK_MS)
             return {i: bus.positions.get(i) for i in ids}
+        finally:
+            self._asking = False
 
     async def where(self, names=None):
         """{name: degrees} of these joints (all by default), as Robot.where() gives them,
@@ -670,7 +677,7 @@ class Panel:
                 part.tick(read)
         if self.armed is not None:
             self.robot.step()  # the stream the parts fed
-        if bus.wire_ms() or self._asking.locked():
+        if bus.wire_ms() or self._asking:
             return  # the stream, a sequence and a route's query come first
         open_ = time.ticks_diff(now, self._seen) < _OPEN_MS
         every = self.read_ms if open_ else _OPEN_MS

@@ -900,8 +900,8 @@ MUTANTS = {
         ),
         (
             "reads-over-the-stream",
-            "        if bus.wire_ms() or self._asking.locked():",
-            "        if self._asking.locked():",
+            "        if bus.wire_ms() or self._asking:",
+            "        if self._asking:",
             "position reads go out between stream frames: the stream lags",
         ),
         (
@@ -1053,13 +1053,13 @@ MUTANTS = {
         ),
         (
             "where-unlocked",
-            "        async with self._asking:",
-            "        if True:",
+            "        while self._asking:  # another's: this one waits its turn",
+            "        while False:",
             "two routes' queries on the bus at once",
         ),
         (
             "reads-over-a-route-query",
-            "        if bus.wire_ms() or self._asking.locked():",
+            "        if bus.wire_ms() or self._asking:",
             "        if bus.wire_ms():",
             "the panel's own reads go out while a route's query waits: it waits longer",
         ),
@@ -1100,7 +1100,7 @@ MUTANTS = {
         ),
         (
             "lazy-part-never-loaded",
-            "                        self.plug(self._later.pop(name))",
+            "                        self.plug(self._later[name])",
             "                        pass",
             "the calibration page (and a jog with no arm) gets 404: it is never loaded",
         ),
