@@ -430,6 +430,8 @@ class Panel:
         """Take out the part of module, plugged in when first asked for, once it is done
         (the calibration page, its calibration over): its module is let go (unload()), and
         it is plugged in again when next asked for."""
+        if module not in self._later.values():
+            return  # plugged in at once (the program's parts): it stays, or it would be gone
         part = self.parts.pop(module, None)
         if part is not None:  # a new list: a loop over the parts (order()) goes on as it was
             self._parts = [p for p in self._parts if p is not part]
@@ -656,6 +658,11 @@ class Panel:
             await asyncio.sleep_ms(_TICK_MS)
 
     def _tick(self):
+        now = time.ticks_ms()
+        conns = self._conns
+        for i in range(len(conns) - 1, -1, -1):  # not in, or not answered, in time: cut
+            if time.ticks_diff(now, conns[i][1].due) >= 0:  # (first: the bus may fail)
+                self._cut(conns[i], _LATE if conns[i][1].reading else _FAILED)
         bus = self.bus
         read = False
         while True:  # replies update bus.positions and bus.battery
@@ -663,11 +670,6 @@ class Panel:
             if cmd is None:
                 break
             read = read or cmd == _POSITIONS
-        now = time.ticks_ms()
-        conns = self._conns
-        for i in range(len(conns) - 1, -1, -1):  # not in, or not answered, in time: cut
-            if time.ticks_diff(now, conns[i][1].due) >= 0:
-                self._cut(conns[i], _LATE if conns[i][1].reading else _FAILED)
         if self.armed is not None:
             for token, seen, _ in self._sessions:
                 if token == self.armed and time.ticks_diff(now, seen) > _DEAD_MS:
@@ -894,6 +896,8 @@ async def serve(
         loop.cancel()
         if server:
             server.close()
+        for c in list(panel._conns):  # the loop cut them: now nothing would
+            panel._cut(c, _BUSY)
         panel.disarm()
         for part in panel._parts:
             if hasattr(part, "close"):

@@ -156,6 +156,9 @@ class Panel:
         """Plug in the part of module (module.attach(panel), which returns the part): now, or
         with route (NAME, or a tuple of them), when /api/NAME is first asked for, or
         condition(panel) holds (now, or once a calibration is saved)."""
+    def unplug(self, module: str) -> None:
+        """Take out the part of module, plugged in when first asked for, once it is done: it
+        is plugged in again when next asked for (a part plugged in at once stays)."""
     def load(self, name: str) -> Any:
         """The module name, imported now if it is not yet, the heap collected first (its code
         then fills the holes that what came before left). How the core plugs parts in, and

@@ -74,7 +74,9 @@ class Calibrate:
 
     def _start(self):
         panel = self.panel
-        panel.order(self)  # the stream, a jog or a sequence ends
+        panel.order(self)  # the stream, a jog or a sequence ends (a recording gives read_ms back)
+        if self.cal is None:
+            self._read_ms = panel.read_ms  # given back as it ends
         panel.busy = (self, _BUSY)  # nothing else drives (the jog says so, its arm let go)
         robot = panel.robot
         ids = {}
