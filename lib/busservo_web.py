@@ -77,7 +77,8 @@
 #   panel.load(name), .unload(name)     import a module a part needs only when used (the
 #                                       heap collected first), and let it go again
 #   panel.unplug(module)                take a part plugged in when first asked for out,
-#                                       once done (plugged in again when next asked for)
+#                                       once done (plugged in again when next asked for;
+#                                       one plugged in at once stays)
 #   panel.free(by)                      every part but by: free(); then a collection (a
 #                                       calibration makes room: the jog lets its arm go)
 #   panel.failed(e)                     show an error on the page while it lasts

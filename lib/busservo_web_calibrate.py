@@ -164,12 +164,16 @@ class Calibrate:
         panel = self.panel
         if links is None and panel.arm:
             links = panel.arm.links  # the program's arm's, kept
+        if links is not None:
+            panel.load("busservo_arm")  # it checks them: loaded for that, then let go
         try:
             robot = self.cal.save(panel.path, links)
         except (TypeError, ValueError) as e:
             raise web.Refused(400, str(e))
         except OSError as e:  # the board's filesystem
             raise web.Refused(500, "could not save %s: %r" % (panel.path, e))
+        finally:
+            panel.unload("busservo_arm")  # (the jog makes its arm once this calibration ends)
         panel.adopt(robot)
 
     async def _home(self, body):

@@ -31,11 +31,10 @@ class Jog:
         self.goal = None  # [x, y, z, pitch] the jogs have reached, while jogged is the order
         self.jogged = -1
         self.note = None  # what the page is told of the last jog (it went along the edge)
-        self.robots = panel.robots  # the robot the arm is on
         self.arm = panel.arm
+        self.robots = panel.robots if self.arm else None  # the robot the arm is on
         self.no_arm = None  # why there is no arm to jog
-        if self.arm is None:
-            self.arm = self._load()
+        self._arm()
 
     def _load(self):
         # The Arm that the links in the calibration file make, or None, and why in no_arm.
@@ -53,12 +52,21 @@ class Jog:
         return None
 
     def _arm(self):
-        # The arm, made again from the file when the panel has a new robot (calibrated), or
-        # once free() let it go, when no other part holds the joints.
+        # The arm, made (again) from the file when the panel has a new robot (calibrated), or
+        # once free() let it go; but not while another part holds the joints (a calibration:
+        # a board's heap holds its code or the arm), nor while the heap has no room for it
+        # (tried again at the next call).
         panel = self.panel
-        if self.robots != panel.robots and not panel.busy:
-            self.arm = self._load()  # (out of memory: tried again the next time)
-            self.robots = panel.robots
+        if self.robots != panel.robots:
+            self.arm = None  # (another robot's)
+            if panel.busy:
+                self.no_arm = panel.busy[1]
+            else:
+                try:
+                    self.arm = self._load()
+                    self.robots = panel.robots
+                except MemoryError:
+                    self.no_arm = "no room for the arm now (out of memory): tried again soon"
         return self.arm
 
     # What the core calls.
@@ -97,7 +105,7 @@ class Jog:
             self.still(False)
             self.arm = self.robots = None
             self.no_arm = panel.busy[1] if panel.busy else "let go: ask again"
-            panel.unload("busservo_arm")
+        panel.unload("busservo_arm")  # (unless the program imported it)
 
     def _along_the_edge(self, arm, goal):
         # A jog a hair past the reach (the arm stretched: from its rest pose, any step but

@@ -57,7 +57,7 @@ MPY="$MPY test_record"
 # MicroPython-style asyncio: not on CPython.
 CPY="test_frames test_commands test_queries test_sim test_reliability test_async test_motion"
 CPY="$CPY test_arm test_calibrate test_teleop test_web test_host test_hid test_adversarial"
-CPY="$CPY test_record"
+CPY="$CPY test_record test_web_lifecycle"
 CPY_ONLY="test_host test_hid"
 # The longest modules start first, so that the short ones fill the other cores meanwhile and
 # the run ends soon after its longest module does (in the order of their times, measured).

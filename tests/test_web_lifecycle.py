@@ -1,5 +1,6 @@
-# Review 35: reproductions of what the panel's RAM changes (load, unload, free, unplug, the
-# loop's cuts) break. Each test here failed on review35's head (3df4968) when written.
+# The panel's parts as they come and go (load, unload, free, unplug), and its connections as
+# its loop cuts them: what an adversarial review of those changes found. Each test here failed
+# on the code before its fix.
 import asyncio
 import os
 import sys
@@ -9,7 +10,7 @@ import busservo_web
 import web_world
 from busservo import CMD_MULT_SERVO_POS_READ
 from shell import free_port, scratch, sh
-from test_web import LINKS, PASSWORD, _panels, arm_robot, armed, recorded, state
+from test_web import LINKS, PASSWORD, _panels, arm_robot, armed, calibrate, recorded, state
 from web_world import http
 
 PARTS_AT_ONCE = (
@@ -22,7 +23,7 @@ PARTS_AT_ONCE = (
 def served(scenario, links=LINKS, **kw):
     """scenario(port, world, robot, path) against serve(robot, ..., **kw) on arm_robot(), its
     calibration file (with links, if given) in a scratch folder."""
-    folder = scratch("rev35")
+    folder = scratch("web-lifecycle")
     os.mkdir(folder)
     path = folder + "/robot.json"
     world = web_world.live()
@@ -47,12 +48,20 @@ def served(scenario, links=LINKS, **kw):
         sh("rm -rf " + folder)
 
 
+def exists(path):
+    try:
+        os.stat(path)
+        return True
+    except OSError:
+        return False
+
+
 def forget(*names):
     for name in names:
         sys.modules.pop(name, None)
 
 
-class Review35(unittest.TestCase):
+class Parts(unittest.TestCase):
     def test_a_calibration_page_plugged_in_at_once_is_there_for_a_second_calibration(self):
         # docs/panel.md: a program may give its own parts list; with the calibration page
         # plugged in at once (None), its first calibration's end unplugs it for good.
@@ -128,12 +137,105 @@ class Review35(unittest.TestCase):
         for name in ("load", "unload", "free", "unplug"):
             self.assertTrue("def %s(" % name in stub, "no %s() in the stub" % name)
 
+    def test_a_first_calibration_that_gives_links_does_not_load_the_arm_while_under_way(self):
+        # docs/panel.md: "a board's heap holds the jog's arm or a calibration, not both".
+        # Saving links plugs the jog in (adopt()), which loads busservo_arm at once, the
+        # calibration still under way; with no room for it, the save answers 503.
+        async def scenario(port, world, robot, path):
+            token = await armed(port)
+            status, reply = await calibrate(port, world, token)
+            self.assertEqual(status, 200, reply)
+            status, reply = await http(
+                port, "POST", "/api/calibrate", {"step": "save", "links": LINKS}, token
+            )
+            self.assertEqual(status, 200, reply)
+            self.assertEqual(reply["cal"]["step"], "saved")
+            self.assertFalse(reply["arm"], reply)  # no jog while it is under way
 
-if __name__ == "__main__":
-    unittest.main()
+        forget("busservo_arm", "busservo_calibrate", "busservo_web_calibrate", "busservo_web_jog")
+        served(scenario, links=None)
+
+    def test_links_given_to_a_save_leave_busservo_arm_for_the_next_calibration_to_free(self):
+        # busservo_calibrate imports busservo_arm itself to check links given to a save: not
+        # through panel.load(), so panel.unload() never lets it go again, and every later
+        # calibration holds busservo_arm's code beside its own.
+        async def scenario(port, world, robot, path):
+            token = await armed(port)
+            status, reply = await calibrate(port, world, token)
+            self.assertEqual(status, 200, reply)
+            body = {"step": "save", "links": LINKS}
+            status, reply = await http(port, "POST", "/api/calibrate", body, token)
+            self.assertEqual(status, 200, reply)
+            body = {"step": "cancel"}
+            status, reply = await http(port, "POST", "/api/calibrate", body, token)
+            self.assertTrue(reply["arm"], reply)  # the jog's arm, made
+            body = {"step": "start"}
+            status, reply = await http(port, "POST", "/api/calibrate", body, token)
+            self.assertEqual(status, 200, reply)
+            self.assertFalse("busservo_arm" in sys.modules)
+
+        forget("busservo_arm", "busservo_calibrate", "busservo_web_calibrate", "busservo_web_jog")
+        served(scenario, links=None)
+
+    def test_a_save_with_no_room_to_check_the_links_saves_nothing_and_can_be_tried_again(self):
+        # A board at its heap's edge: busservo_arm (which checks the links) cannot load while
+        # the calibration is held. Nothing is saved and the page is told (503); the same save,
+        # once there is room, is saved, and the calibration goes on to its home.
+        async def scenario(port, world, robot, path):
+            token = await armed(port)
+            panel = _panels[-1]
+            load = panel.load
+
+            def short(name):
+                if name == "busservo_arm":
+                    raise MemoryError
+                return load(name)
+
+            status, reply = await calibrate(port, world, token)
+            self.assertEqual(status, 200, reply)
+            panel.load = short
+            body = {"step": "save", "links": LINKS}
+            status, reply = await http(port, "POST", "/api/calibrate", body, token)
+            self.assertEqual(status, 503, reply)
+            self.assertFalse(exists(path))  # nothing saved
+            panel.load = load
+            status, reply = await http(port, "POST", "/api/calibrate", body, token)
+            self.assertEqual((status, reply["cal"]["step"]), (200, "saved"), reply)
+            self.assertFalse(reply["arm"], reply)  # not while the calibration holds the joints
+            body = {"step": "home", "confirm": True}
+            status, reply = await http(port, "POST", "/api/calibrate", body, token)
+            self.assertEqual((status, reply.get("arm")), (200, True), reply)
+
+        forget("busservo_arm", "busservo_calibrate", "busservo_web_calibrate", "busservo_web_jog")
+        served(scenario, links=None)
+
+    def test_the_state_is_answered_while_the_arm_cannot_be_made_again(self):
+        # After a calibration, the jog makes its arm again in state(): every poll of the
+        # page. With no room for it (not once, as test_web's, but for as long as the heap is
+        # short), every state, and every STOP's and disarm's answer, is a 503.
+        async def scenario(port, world, robot, path):
+            token = await armed(port)
+            panel = _panels[-1]
+            load = panel.load
+
+            def short(name):
+                if name == "busservo_arm":
+                    raise MemoryError
+                return load(name)
+
+            await http(port, "POST", "/api/calibrate", {"step": "start"}, token)
+            panel.load = short
+            await http(port, "POST", "/api/calibrate", {"step": "cancel"}, token)
+            for _ in range(3):
+                status, reply = await http(port, "GET", "/api/state", token=token)
+                self.assertEqual(status, 200, reply)
+            status, reply = await http(port, "POST", "/api/estop", {}, token)
+            self.assertEqual(status, 200, reply)
+
+        served(scenario)
 
 
-class Review35Loop(unittest.TestCase):
+class Cuts(unittest.TestCase):
     def test_a_half_sent_request_gets_408_while_the_loop_fails_each_turn(self):
         # The loop's turn fails before it cuts late connections (bus.poll() raising: a USB
         # controller unplugged under `busservo panel`): no connection is cut any more.
@@ -154,3 +256,7 @@ class Review35Loop(unittest.TestCase):
             self.assertTrue(got == b"" or got.startswith(b"HTTP/1.0 408"), got)
 
         served(scenario)
+
+
+if __name__ == "__main__":
+    unittest.main()
