@@ -116,6 +116,7 @@ REAL_TIME = (
     "test_sim",
     "test_queries",
     "test_web",
+    "test_web_lifecycle",
     "test_calibrate",
     "test_examples",
 )
