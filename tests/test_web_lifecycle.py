@@ -234,6 +234,20 @@ class Parts(unittest.TestCase):
 
         served(scenario)
 
+    def test_free_lets_the_jogs_arm_go_at_once(self):
+        # A calibration imports its code right after panel.free(): the jog's arm must be let
+        # go by then (the heap holds the one or the other), not at the next state().
+        async def scenario(port, world, robot, path):
+            token = await armed(port)
+            panel = _panels[-1]
+            jog = panel.parts["busservo_web_jog"]
+            self.assertTrue(jog.arm is not None)
+            panel.free(None)
+            self.assertTrue(jog.arm is None)
+            self.assertTrue((await state(port, token))["arm"])  # made again: nothing holds
+
+        served(scenario)
+
 
 class Cuts(unittest.TestCase):
     def test_a_half_sent_request_gets_408_while_the_loop_fails_each_turn(self):
