@@ -889,9 +889,16 @@ MUTANTS = {
         ),
         (
             "dead-man-5-s",
-            "_DEAD_MS = 1000  # the armed page silent this long",
-            "_DEAD_MS = 5000  # the armed page silent this long",
+            "_DEAD_MS = const(1000)  # the armed page silent this long",
+            "_DEAD_MS = const(5000)  # the armed page silent this long",
             "a page whose connection died drives for 5 s, not 1",
+        ),
+        (
+            "halt-undoes-later-orders",
+            "            if self.orders == orders:  # nothing else ordered since",
+            "            if True:  # nothing else ordered since",
+            "a stop's halt, whose read was on its way, moves the joints after an estop: "
+            "torque back (the halt moved from the teaching part into the core, panel.halt())",
         ),
         (
             "dead-man-off",
@@ -1282,13 +1289,6 @@ MUTANTS = {
             'web.need(body, "speed", float, 0.1, 10)',
             'web.need(body, "speed", float, 0.1, 1000)',
             "playback at 1000x: every pose at once",
-        ),
-        (
-            "halt-undoes-later-orders",
-            "            if panel.orders == orders:  # nothing else ordered since",
-            "            if True:  # nothing else ordered since",
-            "a stop's halt, whose read was on its way, moves the joints after an estop: "
-            "torque back",
         ),
         # New with the restructure: the sequence holds the joints while it plays (busy).
         (
