@@ -1461,10 +1461,10 @@ def arm_robot(world):
     )
 
 
-def on_arm(scenario, links=LINKS, robot_of=arm_robot):
+def on_arm(scenario, links=LINKS, robot_of=arm_robot, **options):
     """Run scenario(port, world, robot, path) against a panel on arm_robot() (or robot_of's
     robot), its calibration file path (with links, if given) in a scratch folder, made and
-    removed here."""
+    removed here; options go to serve() (parts=, say)."""
     folder = scratch("web-arm")
     os.mkdir(folder)
     path = folder + "/robot.json"
@@ -1475,7 +1475,8 @@ def on_arm(scenario, links=LINKS, robot_of=arm_robot):
     port = free_port()
 
     async def main():
-        server = asyncio.create_task(busservo_web.serve(robot, PASSWORD, port, path=path))
+        serving = busservo_web.serve(robot, PASSWORD, port, path=path, **options)
+        server = asyncio.create_task(serving)
         await asyncio.sleep_ms(50)
         try:
             await scenario(port, world, robot, path)

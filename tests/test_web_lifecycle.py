@@ -9,8 +9,8 @@ import unittest
 import busservo_web
 import web_world
 from busservo import CMD_MULT_SERVO_POS_READ
-from shell import free_port, scratch, sh
-from test_web import LINKS, PASSWORD, _panels, arm_robot, armed, calibrate, recorded, state
+from shell import free_port
+from test_web import LINKS, PASSWORD, _panels, armed, calibrate, on_arm, recorded, state
 from web_world import http
 
 PARTS_AT_ONCE = (
@@ -18,34 +18,6 @@ PARTS_AT_ONCE = (
     ("busservo_web_teach", None),
     ("busservo_web_calibrate", None),  # a program's own list: the calibration page at once
 )
-
-
-def served(scenario, links=LINKS, **kw):
-    """scenario(port, world, robot, path) against serve(robot, ..., **kw) on arm_robot(), its
-    calibration file (with links, if given) in a scratch folder."""
-    folder = scratch("web-lifecycle")
-    os.mkdir(folder)
-    path = folder + "/robot.json"
-    world = web_world.live()
-    robot = arm_robot(world)
-    if links:
-        robot.save(path, links=links)
-    port = free_port()
-
-    async def main():
-        server = asyncio.create_task(busservo_web.serve(robot, PASSWORD, port, path=path, **kw))
-        await asyncio.sleep_ms(50)
-        try:
-            await scenario(port, world, robot, path)
-        finally:
-            server.cancel()
-            await asyncio.sleep_ms(20)
-
-    asyncio.new_event_loop()
-    try:
-        asyncio.run(main())
-    finally:
-        sh("rm -rf " + folder)
 
 
 def exists(path):
@@ -73,7 +45,7 @@ class Parts(unittest.TestCase):
             status, reply = await ask({"step": "start"})
             self.assertEqual(status, 200, reply)
 
-        served(scenario, parts=PARTS_AT_ONCE)
+        on_arm(scenario, parts=PARTS_AT_ONCE)
 
     def test_the_loop_reads_positions_again_after_a_calibration_that_follows_a_recording(self):
         # The calibration page, plugged in again after each calibration, keeps the panel's
@@ -153,7 +125,7 @@ class Parts(unittest.TestCase):
             self.assertFalse(reply["arm"], reply)  # no jog while it is under way
 
         forget("busservo_arm", "busservo_calibrate", "busservo_web_calibrate", "busservo_web_jog")
-        served(scenario, links=None)
+        on_arm(scenario, links=None)
 
     def test_links_given_to_a_save_leave_busservo_arm_for_the_next_calibration_to_free(self):
         # busservo_calibrate imports busservo_arm itself to check links given to a save: not
@@ -175,7 +147,7 @@ class Parts(unittest.TestCase):
             self.assertFalse("busservo_arm" in sys.modules)
 
         forget("busservo_arm", "busservo_calibrate", "busservo_web_calibrate", "busservo_web_jog")
-        served(scenario, links=None)
+        on_arm(scenario, links=None)
 
     def test_a_save_with_no_room_to_check_the_links_saves_nothing_and_can_be_tried_again(self):
         # A board at its heap's edge: busservo_arm (which checks the links) cannot load while
@@ -207,7 +179,7 @@ class Parts(unittest.TestCase):
             self.assertEqual((status, reply.get("arm")), (200, True), reply)
 
         forget("busservo_arm", "busservo_calibrate", "busservo_web_calibrate", "busservo_web_jog")
-        served(scenario, links=None)
+        on_arm(scenario, links=None)
 
     def test_the_state_is_answered_while_the_arm_cannot_be_made_again(self):
         # After a calibration, the jog makes its arm again in state(): every poll of the
@@ -232,7 +204,7 @@ class Parts(unittest.TestCase):
             status, reply = await http(port, "POST", "/api/estop", {}, token)
             self.assertEqual(status, 200, reply)
 
-        served(scenario)
+        on_arm(scenario)
 
     def test_free_lets_the_jogs_arm_go_at_once(self):
         # A calibration imports its code right after panel.free(): the jog's arm must be let
@@ -246,7 +218,7 @@ class Parts(unittest.TestCase):
             self.assertTrue(jog.arm is None)
             self.assertTrue((await state(port, token))["arm"])  # made again: nothing holds
 
-        served(scenario)
+        on_arm(scenario)
 
 
 class Cuts(unittest.TestCase):
@@ -269,7 +241,7 @@ class Cuts(unittest.TestCase):
             await writer.aclose()
             self.assertTrue(got == b"" or got.startswith(b"HTTP/1.0 408"), got)
 
-        served(scenario)
+        on_arm(scenario)
 
 
 if __name__ == "__main__":
