@@ -28,6 +28,18 @@ def exists(path):
         return False
 
 
+def no_room_for(panel, module):
+    """A panel.load() for a heap with no room for module (MemoryError); the others load."""
+    load = panel.load
+
+    def short(name):
+        if name == module:
+            raise MemoryError
+        return load(name)
+
+    return short
+
+
 def forget(*names):
     for name in names:
         sys.modules.pop(name, None)
@@ -156,13 +168,7 @@ class Parts(unittest.TestCase):
         async def scenario(port, world, robot, path):
             token = await armed(port)
             panel = _panels[-1]
-            load = panel.load
-
-            def short(name):
-                if name == "busservo_arm":
-                    raise MemoryError
-                return load(name)
-
+            load, short = panel.load, no_room_for(panel, "busservo_arm")
             status, reply = await calibrate(port, world, token)
             self.assertEqual(status, 200, reply)
             panel.load = short
@@ -188,13 +194,7 @@ class Parts(unittest.TestCase):
         async def scenario(port, world, robot, path):
             token = await armed(port)
             panel = _panels[-1]
-            load = panel.load
-
-            def short(name):
-                if name == "busservo_arm":
-                    raise MemoryError
-                return load(name)
-
+            short = no_room_for(panel, "busservo_arm")
             await http(port, "POST", "/api/calibrate", {"step": "start"}, token)
             panel.load = short
             await http(port, "POST", "/api/calibrate", {"step": "cancel"}, token)
