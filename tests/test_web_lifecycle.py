@@ -140,9 +140,10 @@ class Parts(unittest.TestCase):
         on_arm(scenario, links=None)
 
     def test_links_given_to_a_save_leave_busservo_arm_for_the_next_calibration_to_free(self):
-        # busservo_calibrate imports busservo_arm itself to check links given to a save: not
-        # through panel.load(), so panel.unload() never lets it go again, and every later
-        # calibration holds busservo_arm's code beside its own.
+        # busservo_calibrate imports busservo_arm to check links given to a save: the panel
+        # loads it for that (panel.load()) and lets it go after, so that the next calibration
+        # does not hold busservo_arm's code beside its own (it did: imported behind the
+        # panel's back, it was never let go).
         async def scenario(port, world, robot, path):
             token = await armed(port)
             status, reply = await calibrate(port, world, token)
@@ -190,7 +191,7 @@ class Parts(unittest.TestCase):
     def test_the_state_is_answered_while_the_arm_cannot_be_made_again(self):
         # After a calibration, the jog makes its arm again in state(): every poll of the
         # page. With no room for it (not once, as test_web's, but for as long as the heap is
-        # short), every state, and every STOP's and disarm's answer, is a 503.
+        # short), the state, and STOP's answer, are still answered (they were each a 503).
         async def scenario(port, world, robot, path):
             token = await armed(port)
             panel = _panels[-1]
