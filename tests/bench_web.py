@@ -75,6 +75,7 @@ web_world = None  # imported after ram() has measured busservo_web's import
 PASSWORD = "bench-pw-1"
 MICROPYTHON32 = sys.argv[sys.argv.index("--32bit") + 1] if "--32bit" in sys.argv else None
 RUNS = 5
+PAGES_MS = 60000  # a run's pages must be done within this (they take about 3 s)
 HEAPS = {  # KB, the first tried first
     "mpy": (64, 62, 60, 59, 58, 57, 56, 54, 52),
     "py": (160, 144, 128, 120, 112, 104, 96),
@@ -476,7 +477,10 @@ def board(folder, heap, port, watch=False, arm=False):
                 for task in tasks:
                     await task
 
-            asyncio.run(pages())
+            try:  # a board that stops answering (its server ended) fails; the bench goes on
+                asyncio.run(asyncio.wait_for_ms(pages(), PAGES_MS))
+            except asyncio.TimeoutError:
+                bad.append("it stopped answering")
         else:
             bad.append("it did not start")
     finally:
