@@ -54,7 +54,9 @@
 #   panel.add(part)                     the core calls these methods of part, those it has:
 #                                       get_NAME(body, token) and post_NAME(body, token)
 #                                       answer GET and POST /api/NAME (the answer's JSON, or
-#                                       raise Refused(status, why)); state(out, token) adds
+#                                       raise Refused(status, why)): methods of its class (or
+#                                       of one it comes from); a route the core or an
+#                                       earlier part has stays theirs; state(out, token) adds
 #                                       its keys to the state; tick(read) each turn of the
 #                                       loop (read: positions came since the last); still(
 #                                       halt) stops what it drives (halt: a sequence's pose
@@ -169,6 +171,18 @@ def _same(given, secret):
     for i in range(len(given)):
         diff |= given[i] ^ (secret[i % n] if secret else 0)
     return diff == 0 and len(secret) > 0
+
+
+def _defines(kind, name):
+    # True if class kind, or a class it comes from, defines name. A route is looked up in the
+    # classes' dicts first: MicroPython keeps, for good, every name getattr() is asked for,
+    # and a page asking for made-up routes would fill the heap.
+    if name in kind.__dict__:
+        return True
+    for base in kind.__bases__:
+        if base is not object and _defines(base, name):
+            return True
+    return False
 
 
 class Refused(Exception):
@@ -794,9 +808,11 @@ class Panel:
                     if name in self._later:  # a part plugged in when first asked for
                         self.plug(self._later[name])  # (once: by any name, till unplugged)
                     attr = "%s_%s" % (method.lower(), name)
-                    handler = getattr(self, "_" + attr, None)  # the core's own
+                    if _defines(type(self), "_" + attr):  # the core's own
+                        handler = getattr(self, "_" + attr)
                     for part in self._parts:
-                        handler = handler or getattr(part, attr, None)
+                        if handler is None and _defines(type(part), attr):
+                            handler = getattr(part, attr)
                 if handler is None:
                     raise Refused(404, "no such page")
                 if method == "POST":

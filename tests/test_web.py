@@ -470,6 +470,31 @@ class BadInput(Tidy):
 
         run(scenario)
 
+    def test_routes_that_do_not_exist_keep_no_ram(self):
+        # MicroPython keeps, for good, every attribute name a getattr() is asked for (it
+        # interns it). A page asking for made-up routes must not fill the heap, a name at
+        # a time (about 40 bytes each: a few thousand would end a board's panel).
+        if sys.implementation.name != "micropython":
+            self.skipTest("CPython lets names go")
+        import gc
+
+        async def scenario(port, world, robot):
+            token = await login(port)
+            for _ in range(2):
+                status, _ = await http(port, "GET", "/api/zzwarm", token=token)
+                gc.collect()
+                before = gc.mem_alloc()
+            for i in range(200):  # names of letters only, as a route's must be
+                name = "zz" + "".join(chr(ord("a") + int(d)) for d in "%03d" % i)
+                for method in ("GET", "POST"):
+                    status, reply = await http(port, method, "/api/" + name, {}, token)
+                    self.assertEqual(status, 404, reply)
+            gc.collect()
+            grew = gc.mem_alloc() - before
+            self.assertTrue(grew < 2000, grew)  # 400 names kept: over 10000
+
+        run(scenario)
+
     def test_idle_connections_hold_nothing_and_a_logged_in_page_always_gets_through(self):
         async def scenario(port, world, robot):
             token = await login(port)
