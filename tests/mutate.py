@@ -1082,8 +1082,8 @@ MUTANTS = {
         # limits on wrong passwords, the sessions, the state's "lost".
         (
             "routes-by-getattr",
-            '                        if handler is None and _defines(type(part), attr):',
-            '                        if handler is None and hasattr(part, attr):',
+            "                        if handler is None and _defines(type(part), attr):",
+            "                        if handler is None and hasattr(part, attr):",
             "each made-up route a page asks for keeps its name for good (MicroPython interns it): "
             "a few thousand fill a board's heap and end the panel",
         ),
