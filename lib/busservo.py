@@ -36,6 +36,9 @@ _CHUNK = const(16)  # bytes read from the UART at a time (17 ms of them at 9600 
 _RX_SIZE = const(272)  # a partial frame (256 bytes at most), and a chunk behind it
 _BUDGET = const(1028)  # bytes one poll() reads at most, so a flood of noise cannot hold it
 _QUEUE = const(32)  # frames a blocking query may hold back for poll()
+_HELD = const(96)  # where in _asked they are held (one buffer: RAM, see Memory in docs)
+_HEARD = const(12)  # _waiting[_HEARD]: ticks_ms of the last read that brought bytes
+_BUSY = const(13)  # _waiting[_BUSY]: 1 while decoding (a callback that polls gets None)
 _TIMEOUT_MS = const(100)  # battery: 10 bytes at 9600 baud take about 10 ms
 _TIMEOUT_PER_ID_MS = const(10)  # 4 more bytes on the wire and one servo to ask
 _TIMEOUT_MAX_MS = const(60000)
@@ -101,10 +104,7 @@ class BusServo:
         self._rx = bytearray(_RX_SIZE)
         self._chunk = bytearray(_CHUNK)
         self._r = self._w = 0
-        self._heard = 0  # ticks_ms of the last read that brought bytes
-        self._busy = False  # decoding: a callback that polls meanwhile gets None
-        self._queue = bytearray(_QUEUE)  # commands of frames held back by queries
-        self._queued = 0
+        self._queued = 0  # commands of frames held back by queries: _asked[_HELD:]
         # Replies that may still come, of each kind: [battery, positions] to the
         # requests in flight, then [battery, positions] to those a query gave up
         # on (see ask()); then [battery, positions]: when (ticks_ms) the last
@@ -113,11 +113,11 @@ class BusServo:
         # flight came too soon for it and was taken for a late one (see _apply);
         # then [battery, positions]: the peer's pace, as the last reply that
         # answered a request of that kind (the only one in flight) showed it: 1
-        # sooner than the wire allows, 0 not, 2 none yet. And the ids of the
-        # positions asked last, with a bit for each count of ids a positions
-        # request in flight asked for.
-        self._waiting = [0] * 10 + [2, 2]
-        self._asked = bytearray(96)  # count, ids; from 85, bit n of 85..95: n ids (1..84)
+        # sooner than the wire allows, 0 not, 2 none yet. Then _HEARD and _BUSY.
+        # And the ids of the positions asked last, with a bit for each count of
+        # ids a positions request in flight asked for; then the queue.
+        self._waiting = [0] * 10 + [2, 2, 0, 0]
+        self._asked = bytearray(_HELD + _QUEUE)  # count, ids; bit n of 85..95: n ids (1..84)
         self.noise = 0  # bytes read that were no frame of the controller's
         self.lost = 0  # frames not held because the queue was full
         self.early = 0  # replies taken that came sooner than the wire at baudrate allows
@@ -398,7 +398,7 @@ class BusServo:
                 break
             if got is None:
                 if not waiting[kind] and (
-                    not given or waited > _GAP_MS and diff(now, self._heard) > _GAP_MS
+                    not given or waited > _GAP_MS and diff(now, waiting[_HEARD]) > _GAP_MS
                 ):
                     break
                 yield
@@ -444,7 +444,7 @@ class BusServo:
                         waiting[kind + 10] = 1
                         self.early += 1
                         got = self._queued - 1
-                        if got >= 0 and self._queue[got] == cmd:
+                        if got >= 0 and self._asked[_HELD + got] == cmd:
                             self._queued = got
                         return
                     # From a peer taken for one as slow as the wire: one reply showed it,
@@ -472,7 +472,11 @@ class BusServo:
             got = self._next_frame()
             self._hold(got)
             now = ms()
-            if got is None and diff(now, self._heard) >= quiet or (diff(now, answered) > _GAP_MS):
+            if (
+                got is None
+                and diff(now, waiting[_HEARD]) >= quiet
+                or diff(now, answered) > _GAP_MS
+            ):
                 return
             if got is None:
                 yield
@@ -481,7 +485,7 @@ class BusServo:
         # Keep a frame that came during a query for poll(); its state is applied.
         if cmd is not None:
             if self._queued < _QUEUE:
-                self._queue[self._queued] = cmd
+                self._asked[_HELD + self._queued] = cmd
                 self._queued += 1
             else:
                 self.lost += 1
@@ -501,19 +505,19 @@ class BusServo:
         # the state and return its command. None once the UART holds nothing
         # more and no whole frame is in rx. _r and _w are stored before every
         # call to the UART, so an exception from it loses no byte read.
-        if self._busy:
+        waiting = self._waiting
+        if waiting[_BUSY]:
             return None  # a callback polled while we decode: the first call goes on
-        self._busy = True
+        waiting[_BUSY] = 1
         try:
             if held and self._queued:  # frames a query held back come first
-                queue = self._queue
-                cmd = queue[0]
+                queue = self._asked
+                cmd = queue[_HELD]
                 self._queued -= 1
-                for i in range(self._queued):  # short, and seldom used: shift it
+                for i in range(_HELD, _HELD + self._queued):  # short, and seldom used: shift
                     queue[i] = queue[i + 1]
                 return cmd
             rx = self._rx
-            waiting = self._waiting
             budget = _BUDGET
             while True:
                 r = self._r
@@ -576,7 +580,7 @@ class BusServo:
                         return None  # any() promised more than readinto() gave
                     self._w = w + n
                     budget -= n
-                    self._heard = time.ticks_ms()
+                    waiting[_HEARD] = time.ticks_ms()
                 elif r < w:
                     # A frame's start, and nothing more has come. Once the line
                     # has been quiet for longer than its missing bytes take (a
@@ -584,7 +588,7 @@ class BusServo:
                     # was cut short: its start was noise.
                     have = w - r
                     missing = rx[r + 2] + 2 - have if have > 2 else _FRAME_MAX
-                    quiet = time.ticks_diff(time.ticks_ms(), self._heard)
+                    quiet = time.ticks_diff(time.ticks_ms(), waiting[_HEARD])
                     if quiet < _GAP_MS + missing * 10000 // self._baud:
                         return None
                     if budget > 0 and self._any():
@@ -594,7 +598,7 @@ class BusServo:
                 else:
                     return None
         finally:
-            self._busy = False
+            waiting[_BUSY] = 0
 
     def _apply(self, cmd, f):
         # Apply the frame at rx[f] to the state. Parameter k is at rx[f + 3 + k].
@@ -610,10 +614,10 @@ class BusServo:
             kind = cmd == CMD_MULT_SERVO_POS_READ  # as in _waiting
             # It can answer the last request of its kind only if it came once that
             # request had left the wire and its own bytes had had time to follow. It
-            # came before the read that brought it (_heard), and before the bytes
+            # came before the read that brought it (_HEARD), and before the bytes
             # read behind it, each a byte's time at least (less 10 %: a fast clock).
             baud = self._baud
-            came = self._heard - (self._w - self._r) * 9000 // baud
+            came = waiting[_HEARD] - (self._w - self._r) * 9000 // baud
             came -= waiting[kind + 4] + (rx[f + 2] + 2) * 10000 // baud  # its earliest
             early = came & _TICKS >= _HALF
             fits = True

@@ -338,8 +338,8 @@ MUTANTS = {
         ),
         (
             "reply-time-not-backed-off",
-            "            came = self._heard - (self._w - self._r) * 9000 // baud",
-            "            came = self._heard",
+            "            came = waiting[_HEARD] - (self._w - self._r) * 9000 // baud",
+            "            came = waiting[_HEARD]",
             "a reply read with later bytes behind it seems to come later than it did: an "
             "early reply is taken for the answer",
         ),
