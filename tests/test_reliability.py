@@ -444,6 +444,34 @@ class Wire(unittest.TestCase):
                 pass
             self.assertEqual(bus.battery, 7500, port)
 
+    def test_a_late_reply_read_with_frames_behind_it_is_not_taken_for_the_answer(self):
+        # As above, but what comes right behind the late reply is two STOPs (events of the
+        # controller's own), and the answer a few ms later. The read that brings the late
+        # reply and the STOPs comes after the answer could have begun to come, but the late
+        # reply came before that read by the STOPs' 8 bytes: too soon to answer. The query
+        # waits on, and takes the answer.
+        for port, w, bus in ports():
+            w.sim.silent = True  # the replies are written here, when they must come
+            bus.request_battery()
+            w.clock.advance_ms(10)
+            query = bus.ask(None, 50)  # gives up on that reply after 150 ms, then asks
+            for ms in range(200):
+                next(query)
+                if bus.wire_ms():  # its request is on the wire
+                    break
+                if ms == 147:  # the late reply, from 3 ms before that, and two STOPs
+                    w.noise(BATTERY_7100 + STOP + STOP)
+                w.clock.advance_ms(1)
+            w.clock.advance_ms(12)  # all in (14.6 ms of line), unread
+            for ms in range(100):
+                if ms == 5:
+                    w.noise(BATTERY_7500)  # the answer
+                if next(query, True):
+                    break
+                w.clock.advance_ms(1)
+            self.assertEqual(bus.battery, 7500, port)
+            self.assertEqual(settle(w, bus, 10).count(CMD_ACTION_GROUP_STOP), 2, port)
+
     def test_a_position_reply_with_other_ids_is_an_event(self):
         for port, w, bus in ports():
             w.noise(b"\x55\x55\x06\x15\x01\x07\xf4\x01")  # servo 7, unasked
