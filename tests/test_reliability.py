@@ -46,6 +46,25 @@ def settle(w, bus, ms=200):
     return got
 
 
+def late_then(w, bus, behind):
+    """A battery query whose request is on the wire, begun once an earlier request's
+    reply was given up on: that reply (7100 mV) comes 3 ms before the query's request has
+    gone, with behind right after it. The controller answers nothing of its own (the test
+    writes what comes)."""
+    w.sim.silent = True
+    bus.request_battery()
+    w.clock.advance_ms(10)
+    query = bus.ask(None, 50)  # gives up on that reply after 150 ms, then asks
+    for ms in range(200):
+        next(query)
+        if bus.wire_ms():  # its request is on the wire
+            return query
+        if ms == 147:
+            w.noise(BATTERY_7100 + behind)
+        w.clock.advance_ms(1)
+    raise AssertionError("the query never asked")
+
+
 def moves(frames):
     return [f for f in frames if f[3] == busservo.CMD_SERVO_MOVE]
 
@@ -428,17 +447,7 @@ class Wire(unittest.TestCase):
         # brings the two. The first came before that read by the answer's 6 bytes: it is
         # not the answer, though it was read after the answer could have come.
         for port, w, bus in ports():
-            w.sim.silent = True  # the replies are written here, when they must come
-            bus.request_battery()
-            w.clock.advance_ms(10)
-            query = bus.ask(None, 50)  # gives up on that reply after 150 ms, then asks
-            for ms in range(200):
-                next(query)
-                if bus.wire_ms():  # its request is on the wire
-                    break
-                if ms == 147:  # the late reply, from 3 ms before that, and the answer
-                    w.noise(BATTERY_7100 + BATTERY_7500)
-                w.clock.advance_ms(1)
+            query = late_then(w, bus, BATTERY_7500)
             w.clock.advance_ms(11)  # both in (12.5 ms of line), unread
             for _ in query:
                 pass
@@ -451,17 +460,7 @@ class Wire(unittest.TestCase):
         # reply came before that read by the STOPs' 8 bytes: too soon to answer. The query
         # waits on, and takes the answer.
         for port, w, bus in ports():
-            w.sim.silent = True  # the replies are written here, when they must come
-            bus.request_battery()
-            w.clock.advance_ms(10)
-            query = bus.ask(None, 50)  # gives up on that reply after 150 ms, then asks
-            for ms in range(200):
-                next(query)
-                if bus.wire_ms():  # its request is on the wire
-                    break
-                if ms == 147:  # the late reply, from 3 ms before that, and two STOPs
-                    w.noise(BATTERY_7100 + STOP + STOP)
-                w.clock.advance_ms(1)
+            query = late_then(w, bus, STOP + STOP)
             w.clock.advance_ms(12)  # all in (14.6 ms of line), unread
             for ms in range(100):
                 if ms == 5:
