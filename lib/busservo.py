@@ -79,6 +79,33 @@ def _count(name, items, high):
     return n
 
 
+# Two of the driver's own helpers are functions of the module rather than methods: a class
+# of 23 names keeps them in a table of 23 entries, one of 25 in a table of 29 (48 bytes more).
+
+
+def _group_cmd(bus, cmd, group, name, value):
+    # A group command (RUN, SPEED): the group, and value (name) as 16 bits.
+    _check("group", group, 0, 0xFF)
+    _check(name, value, 0, 0xFFFF)
+    if bus._cut_at:
+        bus._finish()
+    tx = bus._tx
+    tx[4] = group
+    tx[5] = value
+    tx[6] = value >> 8
+    bus._send(cmd, 3)
+
+
+def _hold(bus, cmd):
+    # Keep a frame that came during bus's query for poll(); its state is applied.
+    if cmd is not None:
+        if bus._queued < _QUEUE:
+            bus._asked[_HELD + bus._queued] = cmd
+            bus._queued += 1
+        else:
+            bus.lost += 1
+
+
 class BusServo:
     def __init__(self, uart, baudrate=9600):
         _check("baudrate", baudrate, 1200, 1000000)
@@ -197,7 +224,7 @@ class BusServo:
 
     def run_group(self, group, times=1):
         """CMD_ACTION_GROUP_RUN: run action group `group` `times` times; 0 = forever."""
-        self._group_cmd(CMD_ACTION_GROUP_RUN, group, "times", times)
+        _group_cmd(self, CMD_ACTION_GROUP_RUN, group, "times", times)
 
     def stop_group(self):
         """CMD_ACTION_GROUP_STOP: stop the running action group, if any."""
@@ -206,7 +233,7 @@ class BusServo:
     def set_group_speed(self, group, percent):
         """CMD_ACTION_GROUP_SPEED: run `group` (ALL_GROUPS for all) at percent %.
         The controller forgets this at power-off."""
-        self._group_cmd(CMD_ACTION_GROUP_SPEED, group, "percent", percent)
+        _group_cmd(self, CMD_ACTION_GROUP_SPEED, group, "percent", percent)
 
     def unload(self, ids):
         """CMD_MULT_SERVO_UNLOAD: let 1..252 servos go limp."""
@@ -240,17 +267,6 @@ class BusServo:
                 for i in range(n + 1):
                     asked[i] = tx[4 + i]  # the count and the ids, as sent
             waiting[kind] += 1
-
-    def _group_cmd(self, cmd, group, name, value):
-        _check("group", group, 0, 0xFF)
-        _check(name, value, 0, 0xFFFF)
-        if self._cut_at:
-            self._finish()
-        tx = self._tx
-        tx[4] = group
-        tx[5] = value
-        tx[6] = value >> 8
-        self._send(cmd, 3)
 
     def _ids_cmd(self, cmd, ids, high):
         n = _count("ids", ids, high)
@@ -361,11 +377,16 @@ class BusServo:
             got[servo_id] = self.positions[servo_id]
         return got
 
-    def ask(self, ids=None, timeout_ms=None):
+    def ask(self, ids=None, timeout_ms=None, again=False):
         """A query step by step, for a scheduler such as busservo_async: a
         generator that asks for the battery (ids None) or for the positions of
         ids, yields while it waits, and ends once the reply has come (then
-        battery or positions hold it). It raises as read_battery() does."""
+        battery or positions hold it). It raises as read_battery() does.
+        With again, it asks again and again, for a loop that reads for ever:
+        it yields None while it waits, then True once the reply has come, or
+        False once none came in time (it does not raise), and its next step
+        asks anew. Made once, it takes no heap a read (a new ask() takes its
+        generator's)."""
         kind = ids is not None  # 0: the battery, 1: positions (as in _waiting)
         waiting = self._waiting
         ms = time.ticks_ms
@@ -373,122 +394,120 @@ class BusServo:
         if timeout_ms is None:
             timeout_ms = _TIMEOUT_MS + (kind and _TIMEOUT_PER_ID_MS * _count("ids", ids, 84))
         _check("timeout_ms", timeout_ms, 0, _TIMEOUT_MAX_MS)
-        if self._cut_at:
-            self._finish()  # a request cut short goes first: its reply is waited out
-        start = time.ticks_add(ms(), self.wire_ms())  # when the wire is free
-        # Those given up on long ago are not listened for (their replies were likely lost),
-        # but still counted: a reply too soon for this query may be one of them. Those of
-        # either kind are: the controller answers in turn, and a burst of late replies of
-        # the other kind may hold this kind's behind it.
-        given = (waiting[2] and (start - waiting[6]) & _TICKS <= _FORGET_MS) or (
-            waiting[3] and (start - waiting[7]) & _TICKS <= _FORGET_MS
-        )
-        while True:  # decode what has come first: none of it answers this query
-            got = self._next_frame()
-            self._hold(got)
-            # Earlier requests of this kind may still be answered: let their replies
-            # come (as events), for as long as this query would wait for its own,
-            # and a late one, in the worst case (however fast other frames come).
-            # Those a query gave up on were waited for so already: now only while
-            # replies keep coming (the controller answers in turn, so a burst of
-            # late replies may come).
-            now = ms()
-            waited = diff(now, start)
-            if waited > timeout_ms + _LATE_MS:
-                break
-            if got is None:
-                if not waiting[kind] and (
-                    not given or waited > _GAP_MS and diff(now, waiting[_HEARD]) > _GAP_MS
+        while True:  # one query (with again, one after another)
+            if self._cut_at:
+                self._finish()  # a request cut short goes first: its reply is waited out
+            start = time.ticks_add(ms(), self.wire_ms())  # when the wire is free
+            # Those given up on long ago are not listened for (their replies were likely lost),
+            # but still counted: a reply too soon for this query may be one of them. Those of
+            # either kind are: the controller answers in turn, and a burst of late replies of
+            # the other kind may hold this kind's behind it.
+            given = (waiting[2] and (start - waiting[6]) & _TICKS <= _FORGET_MS) or (
+                waiting[3] and (start - waiting[7]) & _TICKS <= _FORGET_MS
+            )
+            while True:  # decode what has come first: none of it answers this query
+                got = self._next_frame()
+                _hold(self, got)
+                # Earlier requests of this kind may still be answered: let their replies
+                # come (as events), for as long as this query would wait for its own,
+                # and a late one, in the worst case (however fast other frames come).
+                # Those a query gave up on were waited for so already: now only while
+                # replies keep coming (the controller answers in turn, so a burst of
+                # late replies may come).
+                now = ms()
+                waited = diff(now, start)
+                if waited > timeout_ms + _LATE_MS:
+                    break
+                if got is None:
+                    if not waiting[kind] and (
+                        not given or waited > _GAP_MS and diff(now, waiting[_HEARD]) > _GAP_MS
+                    ):
+                        break
+                    yield
+            # What has not come by now is given up on (and listened for no longer
+            # _FORGET_MS after the last such request). Yet it may come, later still: the
+            # next queries wait for it as above, and while any is given up on take no
+            # reply for their answer that came before their request could have been
+            # answered (see _apply).
+            if waiting[kind]:
+                waiting[kind + 6] = waiting[kind + 4]  # when the last of them left the wire
+                waiting[kind + 2] += waiting[kind]
+                waiting[kind] = 0
+            if kind:
+                self.request_positions(ids)  # checks the ids
+            else:
+                self.request_battery()
+            waiting[kind + 8] = 0  # (another task's request must not clear it: not in _went)
+            # Its reply is due within timeout_ms of the request leaving the wire. One whose
+            # first bytes came by then is let come whole (for _LATE_MS at most).
+            deadline = time.ticks_add(ms(), self.wire_ms() + timeout_ms)
+            cmd = kind and 21 or 15  # CMD_MULT_SERVO_POS_READ or CMD_GET_BATTERY_VOLTAGE
+            late = 0  # frames decoded since the deadline: a few more, then give up
+            ok = True  # answered (None: and no lingering; False: not in time)
+            while True:
+                over = diff(ms(), deadline)
+                got = self._next_frame()
+                if not waiting[kind]:
+                    break  # the reply: it matched the request
+                _hold(self, got)
+                r = self._r + 3  # the command of a frame on its way, if any: a reply's start?
+                if over >= 0 and (
+                    got is None
+                    and (over >= _LATE_MS or r >= self._w or self._rx[r] != cmd)
+                    or late > _QUEUE
+                ):
+                    if waiting[kind + 8]:
+                        if waiting[kind + 10]:
+                            # A reply that fits came too soon and was taken for a late one,
+                            # and none came after it, from a peer not known to be as slow as
+                            # the wire: it was this one (and the late ones were lost, as the
+                            # controller answers in turn). It is no event: taken back from
+                            # poll()'s, if it is the last held.
+                            waiting[kind] = waiting[kind + 2] = 0
+                            waiting[kind + 10] = 1
+                            self.early += 1
+                            got = self._queued - 1
+                            if got >= 0 and self._asked[_HELD + got] == cmd:
+                                self._queued = got
+                            ok = None
+                            break
+                        # From a peer taken for one as slow as the wire: one reply showed it,
+                        # which a program busy elsewhere may have read late. Not known now.
+                        waiting[kind + 10] = 2
+                    if not again:
+                        raise OSError(errno.ETIMEDOUT, "no reply")
+                    ok = False
+                    break
+                if got is None:
+                    yield
+                elif over >= 0:
+                    late += 1
+            # Linger while replies keep coming (until the line has been quiet for `quiet` ms,
+            # or _GAP_MS at most; what comes is an event, the state holds the last): with
+            # a peer faster than the wire, whose timing cannot tell a late reply from the
+            # answer, one right behind this one would be this query's own, and this one an
+            # earlier request's; with some given up on, a burst of late ones may be coming
+            # (the controller answers in turn, both kinds) and this one its first, which the
+            # next query may not listen for (two bytes' time tells).
+            answered = ms()
+            quiet = ok and _LINGER_MS  # 0: no lingering
+            if quiet and waiting[kind + 10] != 1:
+                quiet = (waiting[2] or waiting[3]) and _BURST_MS
+            while quiet:
+                got = self._next_frame()
+                _hold(self, got)
+                now = ms()
+                if (
+                    got is None
+                    and diff(now, waiting[_HEARD]) >= quiet
+                    or diff(now, answered) > _GAP_MS
                 ):
                     break
-                yield
-        # What has not come by now is given up on (and listened for no longer
-        # _FORGET_MS after the last such request). Yet it may come, later still: the
-        # next queries wait for it as above, and while any is given up on take no
-        # reply for their answer that came before their request could have been
-        # answered (see _apply).
-        if waiting[kind]:
-            waiting[kind + 6] = waiting[kind + 4]  # when the last of them left the wire
-            waiting[kind + 2] += waiting[kind]
-            waiting[kind] = 0
-        if kind:
-            self.request_positions(ids)  # checks the ids
-        else:
-            self.request_battery()
-        waiting[kind + 8] = 0  # (another task's request must not clear it: not in _went)
-        # Its reply is due within timeout_ms of the request leaving the wire. One whose
-        # first bytes came by then is let come whole (for _LATE_MS at most).
-        deadline = time.ticks_add(ms(), self.wire_ms() + timeout_ms)
-        cmd = kind and 21 or 15  # its command: CMD_MULT_SERVO_POS_READ or CMD_GET_BATTERY_VOLTAGE
-        late = 0  # frames decoded since the deadline: a few more, then give up
-        while True:
-            over = diff(ms(), deadline)
-            got = self._next_frame()
-            if not waiting[kind]:
-                break  # the reply: it matched the request
-            self._hold(got)
-            r = self._r + 3  # the command of a frame on its way, if any: a reply's start?
-            if over >= 0 and (
-                got is None
-                and (over >= _LATE_MS or r >= self._w or self._rx[r] != cmd)
-                or late > _QUEUE
-            ):
-                if waiting[kind + 8]:
-                    if waiting[kind + 10]:
-                        # A reply that fits came too soon and was taken for a late one,
-                        # and none came after it, from a peer not known to be as slow as
-                        # the wire: it was this one (and the late ones were lost, as the
-                        # controller answers in turn). It is no event: taken back from
-                        # poll()'s, if it is the last held.
-                        waiting[kind] = waiting[kind + 2] = 0
-                        waiting[kind + 10] = 1
-                        self.early += 1
-                        got = self._queued - 1
-                        if got >= 0 and self._asked[_HELD + got] == cmd:
-                            self._queued = got
-                        return
-                    # From a peer taken for one as slow as the wire: one reply showed it,
-                    # which a program busy elsewhere may have read late. Not known now.
-                    waiting[kind + 10] = 2
-                raise OSError(errno.ETIMEDOUT, "no reply")
-            if got is None:
-                yield
-            elif over >= 0:
-                late += 1
-        # Linger while replies keep coming (until the line has been quiet for `quiet` ms,
-        # or _GAP_MS at most; what comes is an event, the state holds the last): with
-        # a peer faster than the wire, whose timing cannot tell a late reply from the
-        # answer, one right behind this one would be this query's own, and this one an
-        # earlier request's; with some given up on, a burst of late ones may be coming
-        # (the controller answers in turn, both kinds) and this one its first, which the
-        # next query may not listen for (two bytes' time tells).
-        answered = ms()
-        quiet = _LINGER_MS
-        if waiting[kind + 10] != 1:
-            if not (waiting[2] or waiting[3]):
+                if got is None:
+                    yield
+            if not again:
                 return
-            quiet = _BURST_MS
-        while True:
-            got = self._next_frame()
-            self._hold(got)
-            now = ms()
-            if (
-                got is None
-                and diff(now, waiting[_HEARD]) >= quiet
-                or diff(now, answered) > _GAP_MS
-            ):
-                return
-            if got is None:
-                yield
-
-    def _hold(self, cmd):
-        # Keep a frame that came during a query for poll(); its state is applied.
-        if cmd is not None:
-            if self._queued < _QUEUE:
-                self._asked[_HELD + self._queued] = cmd
-                self._queued += 1
-            else:
-                self.lost += 1
+            yield ok is not False
 
     # Frames from the controller.
 

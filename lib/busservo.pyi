@@ -188,12 +188,16 @@ class BusServo:
         Raises ValueError or TypeError for bad ids or timeout_ms, and OSError(EIO) if the
         UART takes nothing."""
     def ask(
-        self, ids: Sequence[int] | None = None, timeout_ms: int | None = None
-    ) -> Iterator[None]:
+        self, ids: Sequence[int] | None = None, timeout_ms: int | None = None, again: bool = False
+    ) -> Iterator[bool | None]:
         """A query step by step, for a scheduler such as busservo_async: a generator that
         asks for the battery (ids None) or for the positions of ids, yields while it waits,
         and ends once the reply has come (then battery or positions hold it). It raises as
         read_battery() does.
+
+        With again, it asks again and again, for a loop that reads for ever: it yields None
+        while it waits, then True once the reply has come, or False once none came in time
+        (it does not raise), and its next step asks anew. Made once, it takes no heap a read.
 
         timeout_ms=None is 100 ms for the battery, 100 ms plus 10 ms per servo for
         positions."""

@@ -10,8 +10,9 @@
 #   recording.save("demo.jsonl")             # JSON lines, for a computer
 #   seq = recording.to_sequence(tolerance=2) # keyframes, for busservo_motion's Player
 #
-# A read is the driver's own query (BusServo.ask(), a generator), a step at a time, so the loop
-# never waits for the wire; a read that times out is counted in missed and skipped. Each sample
+# A read is the driver's own query (BusServo.ask(), a generator made once that asks again after
+# each answer, so a read takes no heap), a step at a time, so the loop never waits for the wire;
+# a read that times out is counted in missed and skipped. Each sample
 # is kept as the servos' integer positions and the ticks_ms it came (floats are heap objects:
 # none is made while recording), packed as the difference from the sample before: 2 bytes of
 # ms and a byte a joint (8 bytes for 6 joints), or, where a joint moved more than a byte holds,
@@ -127,22 +128,23 @@ class Recorder:
         Never waits for the wire. True if a sample was kept."""
         if self.done or self._fed:
             return False
-        query = self._query
-        if query is None:
-            if self._quiet and self._w >= PIECE:
+        if self._quiet:
+            if self._w >= PIECE:
                 self._write()  # between a reply and the next request: nothing is due
-            query = self._query = self.bus.ask(self._ids, self.timeout_ms)
+            self._quiet = False  # this step asks again
+        query = self._query
+        if query is None:  # made once, it asks again at each step after an answer
+            query = self._query = self.bus.ask(self._ids, self.timeout_ms, again=True)
         try:
-            if next(query, _END) is not _END:
-                return False  # the reply is not in yet
-        except OSError as e:
+            answered = next(query)
+        except OSError:  # the UART failed (a timeout is no error: answered is False)
             self._query = None
-            self._quiet = False
-            if e.errno != errno.ETIMEDOUT:
-                raise
-            self.missed += 1
+            raise
+        if answered is None:
+            return False  # the reply is not in yet
+        if not answered:
+            self.missed += 1  # (a late reply may still come: not quiet)
             return False
-        self._query = None
         self._quiet = True
         return self._sample(time.ticks_ms(), self.bus.positions)
 

@@ -18,14 +18,14 @@
 # from one sample to the next. On one bus the next request goes first and the move
 # behind it, while the reply comes on RX. The step works in the servos' integer
 # positions: the two calibrations are folded, per joint, into one line in 1/1024ths of
-# a position (made once, here), and nothing but the ask() of each cycle allocates.
+# a position (made once, here), and the leader's query is made once and asks again
+# after each answer: a cycle allocates nothing.
 #
 # Safety: the follower first goes to the leader's pose at `dps`, and follows freely
 # only once its every joint is within ENGAGE degrees of the leader's; a leader joint
 # that does not answer holds the follower (naming the joint), and after that, or a
 # pause in the reads, it engages again the same way. The follower's limits and its
 # joints' own dps always hold. The teleop is the follower's player: estop() stops it.
-import errno
 import time
 
 from busservo_motion import Robot, aio, number
@@ -127,7 +127,9 @@ class Teleop:
         self._at = [0] * n  # the follower's positions: read at the start, then as sent
         self._owed = [0] * n  # a slowed joint's way not yet taken, in 1/1000 positions
         self._pairs = [[servo_id, 0] for servo_id in self._fids]  # the move, made once
-        self._ask = None  # the query in flight (a BusServo.ask() generator)
+        self._ask = None  # the query in flight (a BusServo.ask() generator, again=True)
+        self._lead = None  # the leader's, made once
+        self._got = None  # what the query's first step said (None: waiting)
         self._phase = 0  # 0: not begun, 1: reading the follower, 2: following the leader
         self._fresh = False  # targets not yet sent
         self._room = _ROOM_MS  # on one bus: and a request's time, as measured
@@ -153,7 +155,7 @@ class Teleop:
     def step(self):
         """From the loop: take the leader's reply if it has come, ask again, and send the
         follower its targets once its wire is free. Never waits for the wire; allocates
-        nothing but each read's ask(). True if it sent the follower a move."""
+        nothing once the leader's query is made. True if it sent the follower a move."""
         if self.done:
             return False
         if not self._phase:
@@ -162,38 +164,44 @@ class Teleop:
         try:
             if self._ask is None:
                 self._start()
-            for _ in self._ask:
-                break  # waiting for the reply
-            else:  # the reply has come
-                self._ask = None
+            got = self._got
+            if got is None:
+                got = next(self._ask)  # a step of the read: None while it waits
+            self._got = None
+            if got:  # the reply has come
                 if self._phase == 1:
+                    self._ask = None  # the follower is read once
                     self._follower_read()
                 else:
                     self._leader_read()
-                if self._ask is None and not self.done:
+                if not self.done:
                     self._start()  # at once: on one bus the request goes before the move
-        except OSError as e:
-            if e.errno != errno.ETIMEDOUT:
-                raise
-            self._ask = None
-            self.timeouts += 1
-            if self.recorder is not None and self._phase == 2:
-                self.recorder.take(time.ticks_ms(), None)  # a read skipped: counted
+            elif got is not None:  # none came in time: skipped, and asked again
+                self.timeouts += 1
+                if self.recorder is not None and self._phase == 2:
+                    self.recorder.take(time.ticks_ms(), None)  # a read skipped: counted
+        except OSError:  # the UART failed: its query is over
+            self._ask = self._lead = None
+            raise
         return self._send()
 
     def _start(self):
-        # Ask for the positions: the follower's, once, then the leader's, cycle after cycle.
+        # Ask for the positions: the follower's, once, then the leader's, cycle after cycle,
+        # with one query made once that asks again after each answer (no heap a read). Its
+        # first step sends the request (and may find the answer there already, from a peer
+        # faster than the wire: kept in _got for step()).
         if self._phase == 1:
-            bus, ids = self.follower.bus, self._fids
+            bus = self.follower.bus
+            if self._ask is None:
+                self._ask = bus.ask(self._fids, self.timeout_ms, again=True)
         else:
-            bus, ids = self.leader.bus, self._lids
+            bus = self.leader.bus
+            if self._lead is None:
+                self._lead = bus.ask(self._lids, self.timeout_ms, again=True)
+            self._ask = self._lead
         before = bus.wire_ms()
-        self._ask = bus.ask(ids, self.timeout_ms)
         try:
-            for _ in self._ask:
-                break  # the request is on its way
-            else:
-                return  # answered already (a peer faster than the wire)
+            self._got = next(self._ask)
         finally:
             if self.shared and self._phase == 2:
                 grew = bus.wire_ms() - before + _ROOM_MS
@@ -342,7 +350,7 @@ class Teleop:
         """Stop: nothing more is sent (the move on its way is made); the leader stays limp.
         The follower's Robot knows where it was sent, for its next move."""
         self.done = True
-        self._ask = None
+        self._ask = self._lead = None
         if self.follower.player is self:
             self.follower.player = None
         if self.moves:

@@ -115,30 +115,68 @@ class IdleUART:
         return None
 
 
+class HeldUART:
+    """A controller whose reply to each request (reply, made once) comes when the bench
+    says (come()): it allocates nothing, so the figures are the recorder's and the driver's."""
+
+    def __init__(self, reply):
+        self.reply = reply
+        self.at = self.due = len(reply)  # what is read up to, and what has come
+
+    def come(self):
+        self.due = 0
+
+    def any(self):
+        return 0 if self.due else len(self.reply) - self.at
+
+    def readinto(self, buf, nbytes=None):
+        n = self.any()
+        if nbytes is not None and nbytes < n:
+            n = nbytes
+        for i in range(n):
+            buf[i] = self.reply[self.at + i]
+        self.at += n
+        return n or None
+
+    def write(self, buf, nbytes=None):
+        self.at = 0  # the reply to this request, once it has come
+        self.due = 1
+        return len(buf) if nbytes is None else nbytes
+
+
 def step_figures():
     """{kind: (heap bytes a step, us a step)} and us a move_many() of six, in real time. A
-    step that asks, and move_many(), write to IdleUART; the one that keeps a sample reads its
-    reply from tests/fakeuart.py's FakeUART (Python code: its readinto() is in the figure)."""
+    step that asks (again, its query made once), and move_many(), write to a UART that
+    allocates nothing; the one that keeps a sample reads its reply from tests/fakeuart.py's
+    FakeUART (Python code: its readinto() is in the figure)."""
     from fakeuart import FakeUART
 
     uart = FakeUART()
     bus = busservo.BusServo(uart)
     robot = chain(bus)
     idle = busservo.BusServo(IdleUART())
-    asker = br.Recorder(chain(idle), limp=False)
     request = bytes((0x55, 0x55, 9, 21, 6)) + bytes(range(1, 7))
     reply = bytearray((0x55, 0x55, 21, 21, 6))
     for i in range(1, 7):
         reply += bytes((i, 0xF4 - i * 30, 1))
     uart.reply(request, reply)
     rec = br.Recorder(robot, limp=False)
+    held = HeldUART(bytes(reply))
+    asker = br.Recorder(chain(busservo.BusServo(held)), limp=False)
     out = {}
     for kind in ("asks", "waits", "keeps"):
         heap = us = 0
         who = asker if kind == "asks" else rec
         for _ in range(CALLS):
             uart.clear()
-            if kind != "asks":
+            if kind == "asks":  # the last read answered: the next step asks again
+                asker.step()
+                time.sleep_ms(40)
+                held.come()
+                while not asker.step():
+                    pass
+                asker._w = 0  # the samples let go: no piece to write (figured below)
+            else:
                 rec.step()  # asks
             if kind == "keeps":
                 time.sleep_ms(40)
@@ -154,9 +192,7 @@ def step_figures():
             assert kept == (kind == "keeps"), kind
             heap += b - a
             us += t
-            if kind == "asks":
-                asker._query = None  # the next asks afresh
-            elif kind == "waits":
+            if kind == "waits":
                 rec._query = None  # the next asks afresh (the reply is let go)
                 time.sleep_ms(40)
                 while bus.poll() is not None:
@@ -258,7 +294,7 @@ def main():
     print("| step | heap bytes | us | / move_many() |")
     print("| --- | ---: | ---: | ---: |")
     for kind, what in (
-        ("asks", "asks for the next read (the driver's ask() generator, its request)"),
+        ("asks", "asks for the next read (the query made once; its UART is Python code)"),
         ("waits", "waits for the reply"),
         ("keeps", "takes the reply (read from the fake UART, decoded), keeps the sample"),
         ("packs", "of which packing the sample (the recorder's own part)"),

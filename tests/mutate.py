@@ -206,8 +206,8 @@ MUTANTS = {
         ),
         (
             "group-value-bytes-swapped",
-            "        tx[5] = value\n        tx[6] = value >> 8",
-            "        tx[5] = value >> 8\n        tx[6] = value",
+            "    tx[5] = value\n    tx[6] = value >> 8",
+            "    tx[5] = value >> 8\n    tx[6] = value",
             "run_group(8, 1) runs it 256 times",
         ),
         (
@@ -284,8 +284,8 @@ MUTANTS = {
         ),
         (
             "queue-overflows",
-            "            if self._queued < _QUEUE:",
-            "            if self._queued <= _QUEUE:",
+            "        if bus._queued < _QUEUE:",
+            "        if bus._queued <= _QUEUE:",
             "the 33rd frame held during a query raises IndexError out of the query",
         ),
         (

@@ -419,7 +419,7 @@ class FastPeers(unittest.TestCase):
         # moment); the next query waits out its timeout and takes the reply that came (the
         # early reply taken for the missed one's, then found to be its own: ask()'s
         # waiting[kind + 8] path). But ask() held that reply for poll() when it came
-        # (`self._hold(got)`, as it was not the answer then), so poll() also gives it as an
+        # (`_hold(self, got)`, as it was not the answer then), so poll() also gives it as an
         # event: a task reading events() sees a battery reply that nobody requested (the
         # driver promises a query's reply is never an event: test_reliability's
         # test_a_querys_reply_is_never_an_event_for_another_task). Every time.
@@ -580,7 +580,7 @@ class PositionsAndPoll(unittest.TestCase):
         # cannot hold for poll() (more than 32 came during one query) is counted in
         # bus.lost, not hidden. But ask() gives up after 32 frames past its deadline
         # (`late > _QUEUE`) and raises before it holds the frame it has just decoded
-        # (`self._hold(got)` comes after the raise): that frame is neither polled nor
+        # (`_hold(self, got)` comes after the raise): that frame is neither polled nor
         # counted. Every time a query times out in such a flood (also when it takes the
         # waiting[kind + 8] path and returns there).
         class Flood(FakeUART):

@@ -40,6 +40,31 @@ def heap_per_call(call, before=None):
     return total
 
 
+class Answers:
+    """A controller that answers every request at once with reply, made once (FakeUART's
+    answers are made as they come): it allocates nothing."""
+
+    def __init__(self, reply):
+        self.reply = reply
+        self.at = len(reply)  # nothing to read until a request comes
+
+    def any(self):
+        return len(self.reply) - self.at
+
+    def readinto(self, buf, nbytes=None):
+        n = self.any()
+        if nbytes is not None and nbytes < n:
+            n = nbytes
+        for i in range(n):
+            buf[i] = self.reply[self.at + i]
+        self.at += n
+        return n or None
+
+    def write(self, buf, off=None, nbytes=None):
+        self.at = 0
+        return len(buf) if off is None else off if nbytes is None else nbytes
+
+
 class Allocation(unittest.TestCase):
     def setUp(self):
         self.uart = FakeUART()
@@ -96,6 +121,19 @@ class Allocation(unittest.TestCase):
         for call in (lambda: self.bus.move(1, 500, 0), lambda: self.bus.move_many(six, 0)):
             self.uart.clear()
             self.assertNoHeap(call, lambda: setattr(self.uart, "takes", [3, None, 100]))
+
+    def test_a_query_made_once_reads_again_and_again_with_no_heap(self):
+        # ask(again=True) is made once (its generator is the heap it takes); each read after
+        # takes none: a recording's or a teleop's loop that reads for ever, collected never.
+        ids = (1, 2, 3, 4, 5, 6)
+        bus = busservo.BusServo(Answers(POSITIONS_ALL_500))
+        query = bus.ask(ids, 200, again=True)
+
+        def read():
+            while next(query) is None:
+                pass
+
+        self.assertNoHeap(read)
 
     def test_wire_ms_allocates_nothing(self):
         self.bus.move(1, 500, 0)  # with the wire busy, and idle

@@ -198,6 +198,32 @@ class Queries(unittest.TestCase):
         finally:
             busservo.time = time
 
+    def test_a_query_made_once_asks_again_and_again(self):
+        # ask(again=True), for a loop that reads for ever: made once, it yields None while it
+        # waits, True once the reply has come, and asks anew at its next step; once no reply
+        # comes in time it yields False rather than raising, and goes on.
+        bus = self.bus
+        for request, replies, kind in (
+            (GET_BATTERY, [BATTERY_7500, BATTERY_7400], None),
+            (READ_1_TO_6, [POSITIONS_ALL_500, POSITIONS_ALL_500], [1, 2, 3, 4, 5, 6]),
+        ):
+            self.uart.clear()
+            self.uart.reply(request, replies)  # one a request, then none
+            query = bus.ask(kind, 60, again=True)
+            said = []
+            while len(said) < 4:
+                step = next(query)
+                if step is not None:
+                    said.append((step, bus.battery if kind is None else bus.positions == ALL_500))
+                time.sleep_ms(1)
+            if kind is None:
+                self.assertEqual(said, [(True, 7500), (True, 7400), (False, 7400), (False, 7400)])
+            else:
+                self.assertEqual([s[0] for s in said], [True, True, False, False])
+                self.assertTrue(said[0][1])
+            self.assertEqual(self.uart.written(), request * 4)
+            self.assertIsNone(bus.poll())  # the replies were the query's
+
     def test_a_query_with_bad_arguments_reads_nothing_away(self):
         self.uart.feed(STOP)
         with self.assertRaises(ValueError):

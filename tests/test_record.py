@@ -17,7 +17,7 @@ from busservo import CMD_MULT_SERVO_POS_READ, CMD_MULT_SERVO_UNLOAD
 from busservo import CMD_SERVO_MOVE as MOVE
 from fakeuart import FakeUART
 from shell import scratch
-from test_alloc import heap_per_call
+from test_alloc import Answers, heap_per_call
 from test_motion import raises
 
 PER_DEGREE = 25 / 6  # a bus servo's positions per degree
@@ -634,12 +634,12 @@ class SimAsyncio:
 
 
 class Heap(Tidy):
-    def test_a_recording_step_allocates_nothing_but_the_drivers_query(self):
+    def test_a_recording_step_allocates_nothing(self):
         # The fake UART of tests/test_alloc.py, which allocates nothing, on a simulated clock
         # (on real time, a loaded machine's pause could bring the reply in mid-measure): its
-        # reply comes as a 9600-baud wire would bring it. A step that waits for a reply, and
-        # one that takes it and keeps the sample, allocate nothing; the step that asks again
-        # makes the driver's ask() generator (measured here, and in tests/bench_record.py).
+        # reply comes as a 9600-baud wire would bring it. A step that waits for a reply, one
+        # that takes it and keeps the sample, and the one that asks again allocate nothing:
+        # the driver's query is made once (ask(again=True)) and asks again after each answer.
         clock = wire.Clock(cost_us=1)
         busservo.time = bm.time = br.time = fakeuart.time = clock
         uart = FakeUART()
@@ -664,6 +664,17 @@ class Heap(Tidy):
         rec.step()  # a request is out
         self.assertEqual(heap_per_call(rec.step), 0)  # waiting for its reply
         self.assertEqual(rec.missed, 0)
+        # The step that asks again: FakeUART makes each reply as its request comes (it
+        # allocates then), so here a controller answers at once with a reply made once.
+        rec = br.Recorder(chain(busservo.BusServo(Answers(bytes(reply)))), limp=False)
+
+        def answered():  # outside the measure: the last read is answered, and kept
+            while not rec.step():
+                clock.sleep_ms(5)
+
+        kept = rec.samples
+        self.assertEqual(heap_per_call(rec.step, answered), 0)  # each measured step asks
+        self.assertEqual(rec.samples, kept + 21)  # (and answered() kept each reply)
 
 
 class Files(Tidy):
