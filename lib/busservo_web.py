@@ -173,16 +173,17 @@ def _same(given, secret):
     return diff == 0 and len(secret) > 0
 
 
-def _defines(kind, name):
-    # True if class kind, or a class it comes from, defines name. A route is looked up in the
-    # classes' dicts first: MicroPython keeps, for good, every name getattr() is asked for,
-    # and a page asking for made-up routes would fill the heap.
-    if name in kind.__dict__:
-        return True
+def _routes(kind):
+    # The route methods (get_NAME, post_NAME; the core's begin with _) that class kind, or a
+    # class it comes from, defines. A route is looked up among these, not with getattr()
+    # alone: MicroPython keeps, for good, every name getattr() is asked for, and a page
+    # asking for made-up routes would fill the heap. Read once a class (Panel._known): on
+    # MicroPython each read of a class's __dict__ makes a copy of it.
+    names = [n for n in kind.__dict__ if n.lstrip("_")[:4] in ("get_", "post")]
     for base in kind.__bases__:
-        if base is not object and _defines(base, name):
-            return True
-    return False
+        if base is not object:
+            names += _routes(base)
+    return tuple(names)
 
 
 class Refused(Exception):
@@ -404,6 +405,7 @@ class Panel:
         self._sessions = []  # [token, ticks_ms last seen, why its arming ended], oldest first
         self._wrong = {}  # {client: wrong passwords} since _minute (ticks_ms)
         self._parts = []
+        self._known = {}  # {class: _routes(class)} of the core and the parts, as asked for
         self._later = {}  # {NAME: the module of a part to plug in when /api/NAME is asked for}
         self._lazy = []  # (module, condition) of the parts not plugged in yet
         self._loaded = []  # the modules load() imported
@@ -450,6 +452,7 @@ class Panel:
         part = self.parts.pop(module, None)
         if part is not None:  # a new list: a loop over the parts (order()) goes on as it was
             self._parts = [p for p in self._parts if p is not part]
+            self._known = {}  # its class kept there would keep its module
             self.unload(module)
 
     def load(self, name):
@@ -778,6 +781,14 @@ class Panel:
                 self._conns.remove(mine)
             await _close(writer)
 
+    def _defines(self, part, name):
+        # True if part's class (or one it comes from) has route method name (see _routes).
+        kind = type(part)
+        names = self._known.get(kind)
+        if names is None:
+            names = self._known[kind] = _routes(kind)
+        return name in names
+
     def _cut(self, c, answer):
         # End connection c = (task, _Conn), which is told answer if it said something.
         self._conns.remove(c)
@@ -808,10 +819,10 @@ class Panel:
                     if name in self._later:  # a part plugged in when first asked for
                         self.plug(self._later[name])  # (once: by any name, till unplugged)
                     attr = "%s_%s" % (method.lower(), name)
-                    if _defines(type(self), "_" + attr):  # the core's own
+                    if self._defines(self, "_" + attr):  # the core's own
                         handler = getattr(self, "_" + attr)
                     for part in self._parts:
-                        if handler is None and _defines(type(part), attr):
+                        if handler is None and self._defines(part, attr):
                             handler = getattr(part, attr)
                 if handler is None:
                     raise Refused(404, "no such page")

@@ -1082,10 +1082,17 @@ MUTANTS = {
         # limits on wrong passwords, the sessions, the state's "lost".
         (
             "routes-by-getattr",
-            "                        if handler is None and _defines(type(part), attr):",
+            "                        if handler is None and self._defines(part, attr):",
             "                        if handler is None and hasattr(part, attr):",
             "each made-up route a page asks for keeps its name for good (MicroPython interns it): "
             "a few thousand fill a board's heap and end the panel",
+        ),
+        (
+            "routes-read-each-time",
+            "            names = self._known[kind] = _routes(kind)",
+            "            names = _routes(kind)",
+            "each request copies the dicts of the core's class and the parts' (MicroPython's "
+            "__dict__ is a copy): up to 1.1 KB of garbage a request on a board",
         ),
         (
             "order-stops-no-part",
