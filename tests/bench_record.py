@@ -115,33 +115,26 @@ class IdleUART:
         return None
 
 
-class HeldUART:
+def held_uart(reply):
     """A controller whose reply to each request (reply, made once) comes when the bench
-    says (come()): it allocates nothing, so the figures are the recorder's and the driver's."""
+    says (come()): tests/fakeuart.py's Answers, held back. It allocates nothing, so the
+    figures are the recorder's and the driver's."""
+    from fakeuart import Answers
 
-    def __init__(self, reply):
-        self.reply = reply
-        self.at = self.due = len(reply)  # what is read up to, and what has come
+    class Held(Answers):
+        due = 1  # the reply has not come
 
-    def come(self):
-        self.due = 0
+        def come(self):
+            self.due = 0
 
-    def any(self):
-        return 0 if self.due else len(self.reply) - self.at
+        def any(self):
+            return 0 if self.due else Answers.any(self)
 
-    def readinto(self, buf, nbytes=None):
-        n = self.any()
-        if nbytes is not None and nbytes < n:
-            n = nbytes
-        for i in range(n):
-            buf[i] = self.reply[self.at + i]
-        self.at += n
-        return n or None
+        def write(self, buf, off=None, nbytes=None):
+            self.due = 1
+            return Answers.write(self, buf, off, nbytes)
 
-    def write(self, buf, nbytes=None):
-        self.at = 0  # the reply to this request, once it has come
-        self.due = 1
-        return len(buf) if nbytes is None else nbytes
+    return Held(reply)
 
 
 def step_figures():
@@ -161,7 +154,7 @@ def step_figures():
         reply += bytes((i, 0xF4 - i * 30, 1))
     uart.reply(request, reply)
     rec = br.Recorder(robot, limp=False)
-    held = HeldUART(bytes(reply))
+    held = held_uart(bytes(reply))
     asker = br.Recorder(chain(busservo.BusServo(held)), limp=False)
     out = {}
     for kind in ("asks", "waits", "keeps"):

@@ -163,3 +163,28 @@ class FakeUART:
                     self._since = since
                     return
         self._since = self._nout
+
+
+class Answers:
+    """A controller that answers every request at once with reply, made once (FakeUART's
+    answers are made as they come): it allocates nothing."""
+
+    def __init__(self, reply):
+        self.reply = reply
+        self.at = len(reply)  # nothing to read until a request comes
+
+    def any(self):
+        return len(self.reply) - self.at
+
+    def readinto(self, buf, nbytes=None):
+        n = self.any()
+        if nbytes is not None and nbytes < n:
+            n = nbytes
+        for i in range(n):
+            buf[i] = self.reply[self.at + i]
+        self.at += n
+        return n or None
+
+    def write(self, buf, off=None, nbytes=None):
+        self.at = 0
+        return len(buf) if off is None else off if nbytes is None else nbytes

@@ -10,7 +10,7 @@ except ImportError:  # CPython (tests/cpython.py): the tests that measure the he
     micropython = None
 
 import busservo
-from fakeuart import FakeUART
+from fakeuart import Answers, FakeUART
 from test_frames import BATTERY_7500, COMPLETE_8_ONCE, POSITIONS_ALL_500, RUN_8_ONCE, STOP
 
 CALLS = 20
@@ -38,31 +38,6 @@ def heap_per_call(call, before=None):
     finally:
         gc.enable()
     return total
-
-
-class Answers:
-    """A controller that answers every request at once with reply, made once (FakeUART's
-    answers are made as they come): it allocates nothing."""
-
-    def __init__(self, reply):
-        self.reply = reply
-        self.at = len(reply)  # nothing to read until a request comes
-
-    def any(self):
-        return len(self.reply) - self.at
-
-    def readinto(self, buf, nbytes=None):
-        n = self.any()
-        if nbytes is not None and nbytes < n:
-            n = nbytes
-        for i in range(n):
-            buf[i] = self.reply[self.at + i]
-        self.at += n
-        return n or None
-
-    def write(self, buf, off=None, nbytes=None):
-        self.at = 0
-        return len(buf) if off is None else off if nbytes is None else nbytes
 
 
 class Allocation(unittest.TestCase):

@@ -15,9 +15,9 @@ import fakeuart
 import wire
 from busservo import CMD_MULT_SERVO_POS_READ, CMD_MULT_SERVO_UNLOAD
 from busservo import CMD_SERVO_MOVE as MOVE
-from fakeuart import FakeUART
+from fakeuart import Answers, FakeUART
 from shell import scratch
-from test_alloc import Answers, heap_per_call
+from test_alloc import heap_per_call
 from test_motion import raises
 
 PER_DEGREE = 25 / 6  # a bus servo's positions per degree
