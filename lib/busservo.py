@@ -192,10 +192,12 @@ class BusServo:
     def move_many(self, servos, time_ms):
         """CMD_SERVO_MOVE: move 1..83 servos, given as (id, position) pairs or a
         dict {id: position}, together within time_ms."""
-        if _type(servos) is dict:
-            servos = servos.items()
-        n = _count("servos", servos, 83)
-        _check("time_ms", time_ms, 0, 0xFFFF)
+        n = len(servos) if _type(servos) is list else 0  # (a call costs more than a test)
+        if n < 1 or n > 83 or _type(time_ms) is not _int or time_ms >> 16:
+            if _type(servos) is dict:
+                servos = servos.items()
+            n = _count("servos", servos, 83)  # or say what is wrong
+            _check("time_ms", time_ms, 0, 0xFFFF)
         if self._cut_at:
             self._finish()  # before tx, which may hold its rest, is overwritten
         tx = self._tx
@@ -220,7 +222,7 @@ class BusServo:
         tx[4] = n
         tx[5] = time_ms
         tx[6] = time_ms >> 8
-        self._send(CMD_SERVO_MOVE, 3 * n + 3)
+        self._send(CMD_SERVO_MOVE, i - 4)  # parameters from tx[4] up to i: 3 + 3n
 
     def run_group(self, group, times=1):
         """CMD_ACTION_GROUP_RUN: run action group `group` `times` times; 0 = forever."""
@@ -228,6 +230,8 @@ class BusServo:
 
     def stop_group(self):
         """CMD_ACTION_GROUP_STOP: stop the running action group, if any."""
+        if self._cut_at:
+            self._finish()
         self._send(CMD_ACTION_GROUP_STOP, 0)
 
     def set_group_speed(self, group, percent):
@@ -241,6 +245,8 @@ class BusServo:
 
     def request_battery(self):
         """CMD_GET_BATTERY_VOLTAGE: ask for the voltage; the reply comes through poll()."""
+        if self._cut_at:
+            self._finish()
         self._send(CMD_GET_BATTERY_VOLTAGE, 0)
 
     def request_positions(self, ids):
@@ -293,8 +299,8 @@ class BusServo:
         return ahead + (self._frac > 0) if ahead < _AHEAD_MS else 0
 
     def _send(self, cmd, nparams):
-        if self._cut_at:
-            self._finish()
+        # Send the frame in tx with nparams parameters. Its caller has finished a cut
+        # frame (_finish()) before it wrote them.
         tx = self._tx
         tx[2] = nparams + 2
         tx[3] = cmd
@@ -303,7 +309,8 @@ class BusServo:
         took = self._write(tx, n)  # the first n bytes, without a slice
         if took == n:
             self._sent(n, now)
-            self._went(cmd)
+            if cmd >= CMD_GET_BATTERY_VOLTAGE:  # a request, maybe (_went() sees): not a move
+                self._went(cmd)
         else:
             self._finish(took, now)
 
@@ -441,7 +448,7 @@ class BusServo:
             # Its reply is due within timeout_ms of the request leaving the wire. One whose
             # first bytes came by then is let come whole (for _LATE_MS at most).
             deadline = time.ticks_add(ms(), self.wire_ms() + timeout_ms)
-            cmd = kind and 21 or 15  # CMD_MULT_SERVO_POS_READ or CMD_GET_BATTERY_VOLTAGE
+            cmd = CMD_GET_BATTERY_VOLTAGE + 6 * kind  # or CMD_MULT_SERVO_POS_READ (21)
             late = 0  # frames decoded since the deadline: a few more, then give up
             ok = True  # answered (None: and no lingering; False: not in time)
             while True:

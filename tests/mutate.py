@@ -163,9 +163,30 @@ MUTANTS = {
         ),
         (
             "move-many-84",
-            '        n = _count("servos", servos, 83)',
-            '        n = _count("servos", servos, 84)',
+            "        if n < 1 or n > 83 or",
+            "        if n < 1 or n > 84 or",
             "84 servos overflow the Length byte: a frame the controller cannot read",
+        ),
+        (
+            "battery-request-not-counted",
+            "            if cmd >= CMD_GET_BATTERY_VOLTAGE:",
+            "            if cmd > CMD_GET_BATTERY_VOLTAGE:",
+            "a battery request is not counted: its reply is not taken as the answer",
+        ),
+        (
+            "battery-request-overwrites-a-cut-frame",
+            "        if self._cut_at:\n            self._finish()\n"
+            "        self._send(CMD_GET_BATTERY_VOLTAGE, 0)",
+            "        self._send(CMD_GET_BATTERY_VOLTAGE, 0)",
+            "after a cut frame, request_battery() overwrites its rest: the controller reads"
+            " garbage",
+        ),
+        (
+            "stop-group-overwrites-a-cut-frame",
+            "        if self._cut_at:\n            self._finish()\n"
+            "        self._send(CMD_ACTION_GROUP_STOP, 0)",
+            "        self._send(CMD_ACTION_GROUP_STOP, 0)",
+            "after a cut frame, stop_group() overwrites its rest: the controller reads garbage",
         ),
         (
             "move-many-position-unchecked",

@@ -428,6 +428,36 @@ class Wire(unittest.TestCase):
         self.assertEqual(settle(w, bus, 100), [CMD_MULT_SERVO_POS_READ])
         self.assertEqual((bus.positions, bus.noise, w.garbled), ({1: 500, 2: 500}, 0, 0))
 
+    def test_every_command_sends_a_cut_frames_rest_before_its_own(self):
+        # The rest of a frame the UART took part of waits in the transmit buffer that every
+        # command writes its own frame into: each must send that rest first.
+        commands = {
+            "move": lambda bus: bus.move(3, 800, 0),
+            "move_many": lambda bus: bus.move_many([(3, 800)], 0),
+            "run_group": lambda bus: bus.run_group(1),
+            "stop_group": lambda bus: bus.stop_group(),
+            "set_group_speed": lambda bus: bus.set_group_speed(1, 100),
+            "unload": lambda bus: bus.unload([3]),
+            "request_battery": lambda bus: bus.request_battery(),
+            "request_positions": lambda bus: bus.request_positions([3]),
+        }
+        for name, command in commands.items():
+            w = wire.World("rp2")
+            busservo.time = w.clock
+            bus = busservo.BusServo(w.uart)
+            w.uart.stall(True)  # as above: 3 bytes of room left
+            bus.unload(list(range(1, 11)))
+            for _ in range(27):
+                bus.move(1, 500, 0)
+            with self.assertRaises(OSError):
+                bus.move_many([(1, 700), (2, 700)], 0)  # 3 of its 13 bytes go
+            w.uart.stall(False)
+            settle(w, bus, 400)
+            command(bus)
+            settle(w, bus, 400)
+            self.assertEqual((w.garbled, w.sim.beeps), (0, 0), name)
+            self.assertEqual((w.sim.position(1), w.sim.position(2)), (700, 700), name)
+
     def test_the_longest_reply_handed_over_120_bytes_at_a_time_is_read_whole(self):
         # An esp32 UART made with timeout_char > 0 keeps ESP-IDF's RX threshold of 120
         # bytes: the 257-byte reply to 84 ids comes in parts 125 ms apart. The quiet
