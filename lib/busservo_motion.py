@@ -486,7 +486,15 @@ class Robot:
                 )
             t = _type(degrees)
             if t is _float and joint.lo <= degrees <= joint.hi:  # as move()
-                tmp[k] = joint._float(degrees)
+                # joint._float(degrees), inline: a call costs more than its work (a test
+                # checks that the two agree)
+                pack_into("<f", _bits, 0, degrees)
+                hi = _bits[1]
+                m = (
+                    ((hi & 0x7F | 0x80) << 14 | _bits[0] >> 2) * joint._num
+                    >> 138 - (hi >> 7 & 0xFF)
+                ) // joint._den
+                tmp[k] = (joint._c - m if hi & 0x8000 else joint._c + m) >> _Q
             else:
                 if t is not _int and (t is not _float or not _NINF < degrees < _INF):
                     number("targets[%r]" % name, degrees)

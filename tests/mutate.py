@@ -595,6 +595,12 @@ MUTANTS = {
             "a joint's dps limit lets the stream go four times as fast",
         ),
         (
+            "stream-negative-float-positive",
+            "                tmp[k] = (joint._c - m if hi & 0x8000 else joint._c + m) >> _Q",
+            "                tmp[k] = (joint._c + m if hi & 0x8000 else joint._c + m) >> _Q",
+            "a line or a slider streaming -30.0 degrees sends the joint to +30",
+        ),
+        (
             "negative-float-positive",
             "            if b[3] & 0x80:\n                q = -q",
             "            if b[3] & 0x80:\n                q = q",

@@ -137,6 +137,29 @@ class Calibration(Tidy):
                             self.assertTrue(abs(got - exact) <= 0.51, (kind, trim, d))
                         d += 0.37
 
+    def test_a_streamed_float_goes_to_the_position_joint_position_gives(self):
+        # stream() scales a float's bits inline, without Joint.position()'s call: the two
+        # must agree, for every kind, direction and trim.
+        class Bus:  # a wire always free, that keeps the positions of the last frame
+            def wire_ms(self):
+                return 0
+
+            def move_many(self, pairs, ms):
+                self.sent = [position for _, position in pairs]
+
+        for kind in (bm.BUS, bm.PWM_180, bm.PWM_270):
+            for direction in (1, -1):
+                for trim in (0, 3.5, -7.25):
+                    j = bm.Joint(3, kind=kind, direction=direction, trim=trim)
+                    bus = Bus()
+                    robot = bm.Robot(bus, {"j": j})
+                    d = float(j.lo)
+                    while d <= j.hi:
+                        robot.stream({"j": d})
+                        self.assertTrue(robot.step())
+                        self.assertEqual(bus.sent, [j.position(d)], (kind, direction, trim, d))
+                        d += 0.37
+
     def test_degrees_to_position_and_back_is_within_half_a_position(self):
         for kind in (bm.BUS, bm.PWM_180, bm.PWM_270):
             for direction in (1, -1):
