@@ -609,6 +609,7 @@ class Line:
         x0, y0, zz0, p0 = self._from
         dx, dy, dz, dp = self._dx, self._dy, self._dz, self._dp
         atan2, sqrt, deg, late_ms = _atan2, _sqrt, _DEG, _LATE_MS
+        wire_ms, stream, plane = robot.bus.wire_ms, robot.stream, arm._plane  # bound once
         while True:
             sent = False
             try:
@@ -616,7 +617,7 @@ class Line:
                 since = time.ticks_diff(now, self._stepped)
                 self._stepped = now
                 frame = robot.frame_ms or 20  # a 4-servo frame at 9600 baud, until measured
-                if robot.bus.wire_ms() <= (since if since < frame else frame):
+                if wire_ms() <= (since if since < frame else frame):
                     # The line's time: a frame ahead at first, then as the clock goes, but at
                     # most _LATE_MS an update (a late loop slows the line, rather than
                     # cutting across).
@@ -635,11 +636,11 @@ class Line:
                     pitch = p0 + dp * u if dp else p0
                     if x or y:
                         pose["base"] = atan2(y, x) * deg
-                    arm._plane(sqrt(x * x + y * y), zz, pitch, False)
+                    plane(sqrt(x * x + y * y), zz, pitch, False)
                     pose["shoulder"] = s = arm._s
                     pose["elbow"] = e = arm._e
                     pose["wrist"] = w = arm._w
-                    robot.stream(pose)
+                    stream(pose)
                     if robot.step():
                         self._t = t
                         self._sent = now
