@@ -208,8 +208,8 @@ MUTANTS = {
         ),
         (
             "count-allows-empty",
-            "    if error is TypeError or not 1 <= n <= high:",
-            "    if error is TypeError or not 0 <= n <= high:",
+            "    if not 1 <= n <= high:",
+            "    if not 0 <= n <= high:",
             "move_many([]) and unload([]) send frames the controller beeps at",
         ),
         (
@@ -281,27 +281,29 @@ MUTANTS = {
         ),
         (
             "forget-inverted",
-            "(start - waiting[kind + 6]) & _TICKS > _FORGET_MS:",
-            "(start - waiting[kind + 6]) & _TICKS < _FORGET_MS:",
-            "a reply given up on is forgotten at once: when it comes, it answers the next query",
+            "waiting[3] and (start - waiting[7]) & _TICKS <= _FORGET_MS",
+            "waiting[3] and (start - waiting[7]) & _TICKS > _FORGET_MS",
+            "a positions reply given up on is forgotten at once: when it comes, it answers the"
+            " next query",
         ),
         (
             "late-not-waited",
-            "                    or waited > timeout_ms + _LATE_MS",
-            "                    or waited > timeout_ms",
+            "                if waited > timeout_ms + _LATE_MS:",
+            "                if waited > timeout_ms:",
             "a late reply is not waited out: the next query takes it for its answer",
         ),
         (
             "deadline-ignores-wire",
-            "        deadline = time.ticks_add(time.ticks_ms(), self.wire_ms() + timeout_ms)",
-            "        deadline = time.ticks_add(time.ticks_ms(), timeout_ms)",
+            "            deadline = time.ticks_add(ms(), self.wire_ms() + timeout_ms)",
+            "            deadline = time.ticks_add(ms(), timeout_ms)",
             "a query behind a long move times out before its reply can come",
         ),
         (
             "gives-up-without-a-last-look",
-            "            if got is None and late or late > _QUEUE:",
-            "            if got is None or late > _QUEUE:",
-            "a query gives up as soon as no byte is in: every query times out",
+            "                    and (over >= _LATE_MS or r >= self._w or self._rx[r] != cmd)",
+            "                    and (True or r >= self._w or self._rx[r] != cmd)",
+            "a reply whose first bytes came by the deadline is not let come whole: the query"
+            " times out",
         ),
         (
             "queue-overflows",
@@ -366,8 +368,8 @@ MUTANTS = {
         ),
         (
             "any-ids-answer",
-            "                    answers = answers and asked[k] == rx[i]",
-            "                    answers = answers",
+            "                    fits = fits and asked[k] == rx[i]",
+            "                    fits = fits",
             "a reply with other ids is taken for read_positions()'s answer",
         ),
         (
@@ -378,7 +380,8 @@ MUTANTS = {
         ),
         (
             "every-reply-answers",
-            "            if waiting[kind] and (answers or waiting[kind] > 1):",
+            "            if waiting[kind] and (fits and not (early and waiting[kind + 2]) or"
+            " waiting[kind] > 1):",
             "            if waiting[kind]:",
             "a late reply to an older request answers the query in flight",
         ),
@@ -464,16 +467,17 @@ MUTANTS = {
         ),
         (
             "reply-timing-unchecked",
-            "            answers = came & _TICKS < _HALF",
-            "            answers = True",
-            "a reply that came before the request had left the wire answers it",
+            "            early = came & _TICKS >= _HALF",
+            "            early = False",
+            "a reply that came before the request had left the wire answers it, though an older"
+            " one was given up on",
         ),
         (
             "reply-timing-unmasked",
-            "            answers = came & _TICKS < _HALF",
-            "            answers = came < _HALF",
-            "a reply's time is compared unmasked: early replies answer, and past 2**30 ticks "
-            "(the unix port) none does",
+            "            early = came & _TICKS >= _HALF",
+            "            early = came >= _HALF",
+            "a reply's time is compared unmasked: past 2**30 ticks (the unix port) every reply"
+            " is early",
         ),
         (
             "reply-earliest-without-its-bytes",
@@ -495,21 +499,22 @@ MUTANTS = {
         ),
         (
             "given-up-never-forgotten",
-            "            waiting[kind + 2] = 0  # given up on long ago: lost, not late",
-            "            pass",
-            "after one lost reply, every query waits for quiet first, for ever",
+            "            given = (waiting[2] and (start - waiting[6]) & _TICKS <= _FORGET_MS) or"
+            " (",
+            "            given = waiting[2] or (",
+            "after one lost battery reply, every query waits for quiet first, for ever",
         ),
         (
             "forget-unmasked",
-            "(start - waiting[kind + 6]) & _TICKS > _FORGET_MS:",
-            "start - waiting[kind + 6] > _FORGET_MS:",
-            "past 2**30 ticks (the unix port), a reply given up on is forgotten at once",
+            "(waiting[2] and (start - waiting[6]) & _TICKS <= _FORGET_MS)",
+            "(waiting[2] and start - waiting[6] <= _FORGET_MS)",
+            "past 2**30 ticks (the unix port), a battery reply given up on is forgotten at once",
         ),
         (
             "given-up-not-listened",
-            "                    and time.ticks_diff(now, self._heard) > _GAP_MS\n",
-            "",
-            "a burst of late replies is not listened to out: one answers the query",
+            "not given or waited > _GAP_MS and diff(now, waiting[_HEARD]) > _GAP_MS",
+            "not given or waited > _GAP_MS",
+            "a burst of late replies is not listened to its end: one answers the query",
         ),
         (
             "quiet-rule-no-recheck",
@@ -602,14 +607,15 @@ MUTANTS = {
         ),
         (
             "negative-float-positive",
-            "            if b[3] & 0x80:\n                q = -q",
-            "            if b[3] & 0x80:\n                q = q",
+            "        if hi & 0x8000:\n            return (self._c - m) >> _Q",
+            "        if hi & 0x8000:\n            return (self._c + m) >> _Q",
             "-30.0 degrees goes to +30",
         ),
         (
             "position-not-rounded",
-            "        return (self._c + q + (1 << (_Q - 1))) >> _Q",
-            "        return (self._c + q) >> _Q",
+            "        self._c = round((centre + trim * self.per_degree) * (1 << _Q)) + (1 << (_Q"
+            " - 1))",
+            "        self._c = round((centre + trim * self.per_degree) * (1 << _Q))",
             "positions are rounded down, not to nearest (a quarter of a degree off)",
         ),
         (
@@ -628,25 +634,26 @@ MUTANTS = {
         ),
         (
             "clamps-not-counted",
-            "            clamped += not joint.lo <= degrees <= joint.hi",
-            "            clamped += 0",
-            "robot.clamped stays 0 when targets are clamped",
+            "        if clamped:\n            self.clamped += clamped\n        return took",
+            "        return took",
+            "robot.clamped stays 0 when a move's targets are clamped",
         ),
         (
             "joint-dps-ignored",
-            "            if joints[i].dps:\n                need",
-            "            if False:\n                need",
+            "                if joint.dps:\n                    need = _time(",
+            "                if False:\n                    need = _time(",
             "a move faster than a joint's own dps limit goes at that speed",
         ),
         (
             "move-keeps-stream",
-            "        self._stop_stream()\n        self.bus.move_many([(self._ids[i], p)",
-            "        self.bus.move_many([(self._ids[i], p)",
+            "        if self._live or self._fresh:\n            self.hold()  # (the pairs are"
+            " the stream's: it ends)\n",
+            "",
             "after move(), the next step() sends old stream targets over the move",
         ),
         (
             "move-forgets-where",
-            "        for i, position in pose.items():\n            at[i] = position\n",
+            "        for j in range(k):\n            at[sel[j]] = sends[j][1]\n",
             "",
             "a dps move after a move times its distance from the old position",
         ),
@@ -659,21 +666,23 @@ MUTANTS = {
         ),
         (
             "home-does-not-read",
-            "        self._targets(pose)  # check it before anything is sent\n"
-            "        self._read(list(range(len(self.names))))",
-            "        self._targets(pose)  # check it before anything is sent",
+            "        self.move(pose, _CHECK)  # check it before anything is sent\n       "
+            " self._read(list(range(len(self.names))))",
+            "        self.move(pose, _CHECK)  # check it before anything is sent",
             "home() after a move by hand times its soft start from a stale position",
         ),
         (
             "estop-keeps-player",
-            "        if self.player:\n            self.player.stop()\n        self._stop_stream()",
-            "        self._stop_stream()",
+            "        if self.player:\n            self.player.stop()\n        self.hold()\n     "
+            "   for i in range(len(self._at)):",
+            "        self.hold()\n        for i in range(len(self._at)):",
             "a sequence playing goes on after estop(): the joints get their torque back",
         ),
         (
             "estop-keeps-stream",
-            "            self.player.stop()\n        self._stop_stream()\n        for i in",
-            "            self.player.stop()\n        for i in",
+            "            self.player.stop()\n        self.hold()\n        for i in"
+            " range(len(self._at)):",
+            "            self.player.stop()\n        for i in range(len(self._at)):",
             "after estop(), the next step() sends the stream's targets: torque back",
         ),
         (
@@ -748,10 +757,10 @@ MUTANTS = {
         ),
         (
             "step-elapsed-uncapped",
-            "        if elapsed > cap:\n            elapsed = cap\n",
+            "                    if elapsed > cap:\n                        elapsed = cap\n",
             "",
-            "after a pause, the first frame commits a slowed joint to the whole pause's way "
-            "at once: the targets after it wait",
+            "after a pause, the first frame commits a slowed joint to the whole pause's way at"
+            " once: the targets after it wait",
         ),
         (
             "step-cap-without-period",
@@ -761,17 +770,19 @@ MUTANTS = {
         ),
         (
             "step-glide-ignored",
-            "                if most > glide:\n                    glide = most\n",
+            "                if need > glide:\n                    glide = need\n",
             "",
-            "a frame glides for the stream's pace whatever its step: a joint turns faster "
-            "than its dps",
+            "a frame glides for the stream's pace whatever its step: a joint turns faster than"
+            " its dps",
         ),
         (
             "step-glide-tenfold-short",
-            "                most = (abs(position - at[i]) * 1000 + pps - 1) // pps",
-            "                most = (abs(position - at[i]) * 100 + pps - 1) // pps",
-            "a long step glides a tenth of its time at the dps: the joint jerks at ten times "
-            "its dps, then waits",
+            "                need = (abs(position - at[i]) * 1000 + pps - 1) // pps  # ms at its"
+            " dps",
+            "                need = (abs(position - at[i]) * 100 + pps - 1) // pps  # ms at its"
+            " dps",
+            "a long step glides a tenth of its time at the dps: the joint jerks at ten times its"
+            " dps, then waits",
         ),
         (
             "step-dps-one-way",
@@ -1510,14 +1521,14 @@ MUTANTS = {
     "busservo_arm": [
         (
             "base-mirrored",
-            "            base = math.atan2(y, x) * _DEG",
-            "            base = math.atan2(-y, x) * _DEG",
+            "                    base = atan2(y, x) * deg",
+            "                    base = atan2(-y, x) * deg",
             "move_to(150, 60, ...) turns the base to the right: the tool point lands at y = -60",
         ),
         (
             "base-limits-unchecked",
-            "        if not joint.lo <= base <= joint.hi:",
-            "        if False:",
+            "                if base < joint.lo or base > joint.hi:",
+            "                if False:",
             "a point behind the base is taken: the robot clamps the base, the arm goes elsewhere",
         ),
         (
@@ -1528,15 +1539,15 @@ MUTANTS = {
         ),
         (
             "hand-offset-sign",
-            "        wr = r - self._h * math.cos(p)",
-            "        wr = r + self._h * math.cos(p)",
-            "the wrist is put the hand's length beyond the tool point: every point with the "
-            "hand not vertical is missed",
+            "        wr = r - self._hand_r",
+            "        wr = r + self._hand_r",
+            "the wrist is put the hand's length beyond the tool point: every point with the hand"
+            " not vertical is missed",
         ),
         (
             "elbow-cosine-law",
-            "        c = (d2 - u * u - f * f) / (2 * u * f)",
-            "        c = (d2 - u * u + f * f) / (2 * u * f)",
+            "        self._uf2 = u * u + f * f",
+            "        self._uf2 = u * u - f * f",
             "the elbow's angle is wrong: the tool point misses every target",
         ),
         (
@@ -1548,16 +1559,17 @@ MUTANTS = {
         ),
         (
             "wrist-pitch-sign",
-            "        self._w = w = _wrap(90 - pitch - s - e)",
-            "        self._w = w = _wrap(90 + pitch - s - e)",
+            "        w = 90 - pitch - s - e",
+            "        w = 90 + pitch - s - e",
             "the hand points up when asked to point down",
         ),
         (
             "plane-limits-unchecked",
-            "                if not joint.lo <= value <= joint.hi:",
-            "                if False:",
-            "a pose past the shoulder's, elbow's or wrist's limit is taken: the robot clamps "
-            "it, the tool point goes elsewhere (into the table)",
+            "            if s < joint.lo or s > joint.hi:\n                return"
+            " self._beyond(1, s)",
+            "            if False:\n                return self._beyond(1, s)",
+            "a pose past the shoulder's limit is taken: the robot clamps it, the tool point goes"
+            " elsewhere (into the table)",
         ),
         (
             "too-near-taken",
@@ -1575,8 +1587,8 @@ MUTANTS = {
         ),
         (
             "point-y-mirrored",
-            "        return r * math.cos(base), r * math.sin(base), z, _wrap(90 - c * _DEG)",
-            "        return r * math.cos(base), -r * math.sin(base), z, _wrap(90 - c * _DEG)",
+            "        return r * _cos(base), r * _sin(base), z, _wrap(90 - c * _DEG)",
+            "        return r * _cos(base), -r * _sin(base), z, _wrap(90 - c * _DEG)",
             "where() and point() give y mirrored: a line starts from the wrong place",
         ),
         (
@@ -1587,16 +1599,16 @@ MUTANTS = {
         ),
         (
             "distance-tool-only",
-            "        return max(tool, math.sqrt(dx * dx + dy * dy + dz * dz))",
-            "        return tool",
-            "a turn of the hand about the tool point at mm_s takes no time: the wrist whips "
-            "round at full speed",
+            "        return max(tool, _sqrt(dx * dx + dy * dy + dz * dz), abs(_wrap(p1 - p0)))",
+            "        return max(tool, abs(_wrap(p1 - p0)))",
+            "a turn of the hand about the tool point at mm_s takes the pitch's time only: the"
+            " wrist whips round",
         ),
         (
             "move-to-keeps-line",
-            "        if robot.player:\n            robot.player.stop()\n"
-            "        took = robot.move(pose, ms=ms)",
-            "        took = robot.move(pose, ms=ms)",
+            "                    if robot.player:\n                        robot.player.stop()\n"
+            "                    took = robot.move(pose, ms)",
+            "                    took = robot.move(pose, ms)",
             "a line going on after move_to() pulls the arm back onto it",
         ),
         (
@@ -1604,12 +1616,6 @@ MUTANTS = {
             "            return Arm(robot, links, elbow_up)",
             "            return Arm(robot, links)",
             "Arm.load(..., elbow_up=False) solves elbow up: the arm goes the other way",
-        ),
-        (
-            "save-drops-the-rest",
-            "        if _type(config) is not dict:\n            config = {}",
-            "        config = {}",
-            "arm.save() loses what else robot.json holds",
         ),
         (
             "line-checks-the-end-only",
@@ -1633,25 +1639,30 @@ MUTANTS = {
             "point leaves the line",
         ),
         (
+            "links-negative-taken",
+            '        _number("links[%r]" % name, links[name], 0, 10000)',
+            '        _number("links[%r]" % name, links[name], -10000, 10000)',
+            "a negative link length is taken: the arm's sums go wrong without a word",
+        ),
+        (
             "line-late-uncapped",
-            "            t += dt if dt < _LATE_MS else _LATE_MS",
-            "            t += dt",
-            "after a late loop (a GC, a blocking read), the line jumps ahead: a joint with a "
-            "dps lags, the tool point leaves the line",
+            "                        t += dt if dt < late_ms else late_ms",
+            "                        t += dt",
+            "after a late loop (a GC, a blocking read), the line jumps ahead: a joint with a dps"
+            " lags, the tool point leaves the line",
         ),
         (
             "line-base-mirrored",
-            '            pose["base"] = math.atan2(y, x) * _DEG',
-            '            pose["base"] = math.atan2(-y, x) * _DEG',
+            '                        pose["base"] = atan2(y, x) * deg',
+            '                        pose["base"] = atan2(-y, x) * deg',
             "a line runs mirrored across the x axis",
         ),
         (
             "line-solves-on-a-busy-wire",
-            "        if robot.bus.wire_ms() > (since if since < frame else frame):\n"
-            "            return False\n        # The line's time",
-            "        # The line's time",
-            "line.step() solves (allocating) at every call while the wire is busy: the loop "
-            "slows, the GC runs",
+            "                if wire_ms() <= (since if since < frame else frame):",
+            "                if True:",
+            "line.step() solves (allocating) at every call while the wire is busy: the loop"
+            " slows, the GC runs",
         ),
         (
             "line-stop-keeps-targets",
@@ -1765,21 +1776,15 @@ MUTANTS = {
         ),
         (
             "save-uncalibrated",
-            "        robot = self.robot()\n        config =",
-            "        robot = self._robot\n        config =",
+            "        robot = self.robot()\n",
+            "        robot = self._robot\n",
             "save() writes the servos as they came (no trims, full reach) and refuses nothing",
         ),
         (
             "links-unchecked",
-            '            config["links"] = _links(links)',
-            '            config["links"] = links',
+            '            more["links"] = check_links(links)',
+            '            more["links"] = links',
             "links that are no lengths are saved: busservo_arm refuses the file later",
-        ),
-        (
-            "links-negative-taken",
-            "not 0 <= mm <= 10000:",
-            "not mm <= 10000:",
-            "a negative link length is saved",
         ),
     ],
     # The example a maker runs: nothing moves under power before the person says so.
