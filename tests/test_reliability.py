@@ -519,6 +519,17 @@ class Wire(unittest.TestCase):
             w.clock.advance_ms(140)
             self.assertEqual(bus.wire_ms(), 0, port)
 
+    def test_wire_ms_counts_the_last_bytes_part_of_a_ms(self):
+        # A move is 10 bytes, 10.42 ms at 9600 baud: 10 ms on, its last byte is still on the
+        # wire, and wire_ms() must not say 0 (a query's timeout would start too soon).
+        for port, w, bus in ports():
+            bus.move(1, 500, 0)
+            self.assertEqual(bus.wire_ms(), 11, port)
+            w.clock.advance_ms(10)
+            self.assertEqual(bus.wire_ms(), 1, port)
+            w.clock.advance_ms(1)
+            self.assertEqual(bus.wire_ms(), 0, port)
+
     def test_seconds_of_bytes_ahead_are_counted_whole(self):
         # A UART with a 16 KB transmit buffer (rp2 allows 32766 bytes: 34 s): 17 s of bytes
         # ahead, all counted (once, more than 10 s was taken for the ticks coming round).
