@@ -219,7 +219,7 @@ class BusServo:
             tx[i + 1] = position
             tx[i + 2] = position >> 8
             i += 3
-        tx[4] = n
+        tx[4] = (i - 7) // 3  # the pairs read: not len(), if servos changed meanwhile
         tx[5] = time_ms
         tx[6] = time_ms >> 8
         self._send(CMD_SERVO_MOVE, i - 4)  # parameters from tx[4] up to i: 3 + 3n

@@ -577,10 +577,12 @@ class Line:
         self._t = -1  # the line's time at the last target streamed, in ms (-1: none yet)
         self._sent = 0  # ticks_ms then
         self._stepped = time.ticks_ms()
+        robot = self.robot
+        # What each step calls, looked up once, here: a robot with no bus is refused now, and
+        # one whose bus goes later gets what its step() raises, at each step.
+        self._steps = self._stepper(robot.bus.wire_ms, robot.stream, arm._plane)
         arm._pose["base"] = at[0]  # kept while the line runs along the base's axis
         self._err = None  # what step() raised, for it to raise again
-        self._steps = self._stepper()
-        robot = self.robot
         if robot.player:
             robot.player.stop()
         robot.player = self  # robot.estop() stops it
@@ -599,17 +601,18 @@ class Line:
             raise e
         return sent
 
-    def _stepper(self):
+    def _stepper(self, wire_ms, stream, plane):
         # step()'s work, a call a turn: True if it sent, or False (and what it raised in
         # self._err). What does not change along the line, and the module's names it uses,
-        # are its locals, looked up once.
+        # are its locals, looked up once; the bus's wire_ms(), the robot's stream() and the
+        # arm's plane solve come bound, from Line() (so that nothing here raises outside the
+        # try below: that would end the generator, and each later step() raise StopIteration).
         robot = self.robot
         arm = self.arm
         pose = arm._pose
         x0, y0, zz0, p0 = self._from
         dx, dy, dz, dp = self._dx, self._dy, self._dz, self._dp
         atan2, sqrt, deg, late_ms = _atan2, _sqrt, _DEG, _LATE_MS
-        wire_ms, stream, plane = robot.bus.wire_ms, robot.stream, arm._plane  # bound once
         while True:
             sent = False
             try:
@@ -656,7 +659,7 @@ class Line:
             except BaseException as err:  # (Ctrl-C too: step() raises it)
                 self._err = err
                 if _awaitable:  # CPython: as in Arm._mover()
-                    self._steps = self._stepper()
+                    self._steps = self._stepper(wire_ms, stream, plane)
             yield sent
 
     def stop(self):

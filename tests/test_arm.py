@@ -311,6 +311,29 @@ class Refusals(Tidy):
         settle(w, bus, 50)
         self.assertEqual(len(moves(w)), 3)
 
+    def test_a_line_whose_robot_has_no_bus_for_a_while_raises_each_step_then_goes_on(self):
+        # A program that closes its port on an error (robot.bus = None) and opens it again
+        # (a new BusServo): each step() meanwhile raises what it met, and the line goes on
+        # on the new bus once it is there, even if the bus went before the line's first step.
+        w, bus = world()
+        a = arm(bus)
+        a.move_to(150, 0, 40, -90, ms=0)
+        settle(w, bus, 50)
+        first = w.frames_total
+        line = a.line_to(150, 50, 40, mm_s=100)
+        a.robot.bus = None
+        for _ in range(2):
+            with self.assertRaises(AttributeError):
+                line.step()
+        a.robot.bus = bus = busservo.BusServo(w.uart)
+        for _ in range(2000):
+            if line.done:
+                break
+            line.step()
+            settle(w, bus, 1)
+        self.assertTrue(line.done)
+        self.assertTrue(w.frames_total - first >= 10, w.frames_total - first)
+
     def test_a_line_leaving_the_reach_is_refused_whole_and_nothing_is_sent(self):
         # Both ends in reach, with the base at +-116.6 degrees; the line between them passes
         # behind the base, which turns 240 degrees at most.

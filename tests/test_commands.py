@@ -41,6 +41,55 @@ class Commands(unittest.TestCase):
         self.assertEqual(sent[:7], bytes((0x55, 0x55, 254, 0x03, 83, 0xCD, 0xAB)))
         self.assertEqual(sent[-3:], bytes((82, 0x34, 0x12)))
 
+    def test_move_many_sends_the_pairs_it_read_with_their_count(self):
+        # servos that change while move_many() reads them (here a pair's __iter__; on a board
+        # with two cores, another thread), or a sequence whose len() is not what it holds:
+        # the frame carries the pairs read, and their count. (The controller drops a frame
+        # whose Length is not 3 * count + 5, and looks for frames in its bytes; a count it
+        # believes beyond the pairs sent takes stale bytes for servos.)
+        def grow(servos):
+            servos.append((9, 900))
+
+        def shrink(servos):
+            servos.pop()
+
+        class Pair:
+            def __init__(self, servos, change):
+                self.servos = servos
+                self.change = change
+
+            def __iter__(self):
+                if self.change:
+                    self.change(self.servos)
+                    self.change = None  # once
+                return iter((1, 500))
+
+        class Sized:  # says 2, holds 3
+            def __len__(self):
+                return 2
+
+            def __iter__(self):
+                return iter([(1, 500), (2, 600), (3, 700)])
+
+        for change, read in (
+            (grow, [(1, 500), (2, 600), (3, 700), (9, 900)]),
+            (shrink, [(1, 500), (2, 600)]),
+            (None, [(1, 500), (2, 600), (3, 700)]),
+        ):
+            uart = FakeUART()
+            bus = busservo.BusServo(uart)
+            bus.move_many(read, 100)
+            want = uart.written()
+            uart.clear()
+            bus.move_many([(5, 555), (6, 666), (7, 777)], 100)  # tx holds their bytes
+            uart.clear()
+            servos = Sized()
+            if change:
+                servos = []
+                servos += [Pair(servos, change), (2, 600), (3, 700)]
+            bus.move_many(servos, 100)
+            self.assertEqual(uart.written(), want, change)
+
     def test_move_extremes(self):
         self.bus.move(255, 65535, 65535)
         self.assertSent(0x55, 0x55, 0x08, 0x03, 0x01, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF)
