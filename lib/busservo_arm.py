@@ -578,9 +578,9 @@ class Line:
         self._sent = 0  # ticks_ms then
         self._stepped = time.ticks_ms()
         robot = self.robot
-        # What each step calls, looked up once, here: a robot with no bus is refused now, and
-        # one whose bus goes later gets what its step() raises, at each step.
-        self._steps = self._stepper(robot.bus.wire_ms, robot.stream, arm._plane)
+        # The robot's stream() and the arm's plane solve, looked up once, here (the bus is
+        # looked up each step: a program may open its port again, and robot.step() uses it).
+        self._steps = self._stepper(robot.stream, arm._plane)
         arm._pose["base"] = at[0]  # kept while the line runs along the base's axis
         self._err = None  # what step() raised, for it to raise again
         if robot.player:
@@ -601,12 +601,12 @@ class Line:
             raise e
         return sent
 
-    def _stepper(self, wire_ms, stream, plane):
+    def _stepper(self, stream, plane):
         # step()'s work, a call a turn: True if it sent, or False (and what it raised in
         # self._err). What does not change along the line, and the module's names it uses,
-        # are its locals, looked up once; the bus's wire_ms(), the robot's stream() and the
-        # arm's plane solve come bound, from Line() (so that nothing here raises outside the
-        # try below: that would end the generator, and each later step() raise StopIteration).
+        # are its locals, looked up once; the robot's stream() and the arm's plane solve come
+        # bound, from Line() (so that nothing here raises outside the try below: that would
+        # end the generator, and each later step() raise StopIteration).
         robot = self.robot
         arm = self.arm
         pose = arm._pose
@@ -620,7 +620,7 @@ class Line:
                 since = time.ticks_diff(now, self._stepped)
                 self._stepped = now
                 frame = robot.frame_ms or 20  # a 4-servo frame at 9600 baud, until measured
-                if wire_ms() <= (since if since < frame else frame):
+                if robot.bus.wire_ms() <= (since if since < frame else frame):
                     # The line's time: a frame ahead at first, then as the clock goes, but at
                     # most _LATE_MS an update (a late loop slows the line, rather than
                     # cutting across).
@@ -659,7 +659,7 @@ class Line:
             except BaseException as err:  # (Ctrl-C too: step() raises it)
                 self._err = err
                 if _awaitable:  # CPython: as in Arm._mover()
-                    self._steps = self._stepper(wire_ms, stream, plane)
+                    self._steps = self._stepper(stream, plane)
             yield sent
 
     def stop(self):

@@ -1659,7 +1659,7 @@ MUTANTS = {
         ),
         (
             "line-solves-on-a-busy-wire",
-            "                if wire_ms() <= (since if since < frame else frame):",
+            "                if robot.bus.wire_ms() <= (since if since < frame else frame):",
             "                if True:",
             "line.step() solves (allocating) at every call while the wire is busy: the loop"
             " slows, the GC runs",
