@@ -407,15 +407,20 @@ class Wire(unittest.TestCase):
         requests = [f for f in w.frames() if f[3] == CMD_GET_BATTERY_VOLTAGE]
         self.assertEqual((len(requests), w.garbled, w.sim.beeps), (3, 0, 0))
 
-    def test_a_cut_positions_request_finished_by_the_next_command_is_answered(self):
-        # Its reply is a positions event, not noise: the request was counted once finished.
+    def three_bytes_of_room(self):
+        """(world, bus): an rp2 world whose UART stalls with 3 bytes of room left."""
         w = wire.World("rp2")
         busservo.time = w.clock
         bus = busservo.BusServo(w.uart)
-        w.uart.stall(True)  # as above: 3 bytes of room left
+        w.uart.stall(True)
         bus.unload(list(range(1, 11)))
         for _ in range(27):
             bus.move(1, 500, 0)
+        return w, bus
+
+    def test_a_cut_positions_request_finished_by_the_next_command_is_answered(self):
+        # Its reply is a positions event, not noise: the request was counted once finished.
+        w, bus = self.three_bytes_of_room()
         try:
             bus.request_positions([1, 2])  # 3 of its 7 bytes go
             error = None
@@ -442,13 +447,7 @@ class Wire(unittest.TestCase):
             "request_positions": lambda bus: bus.request_positions([3]),
         }
         for name, command in commands.items():
-            w = wire.World("rp2")
-            busservo.time = w.clock
-            bus = busservo.BusServo(w.uart)
-            w.uart.stall(True)  # as above: 3 bytes of room left
-            bus.unload(list(range(1, 11)))
-            for _ in range(27):
-                bus.move(1, 500, 0)
+            w, bus = self.three_bytes_of_room()
             with self.assertRaises(OSError):
                 bus.move_many([(1, 700), (2, 700)], 0)  # 3 of its 13 bytes go
             w.uart.stall(False)
