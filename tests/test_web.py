@@ -491,7 +491,9 @@ class BadInput(Tidy):
                     self.assertEqual(status, 404, reply)
             gc.collect()
             grew = gc.mem_alloc() - before
-            self.assertTrue(grew < 2000, grew)  # 400 names kept: over 10000
+            # 400 names kept: over 24000 (64-bit port). What else a busy run leaves about
+            # (connections, tasks) came to 2240 once, under load.
+            self.assertTrue(grew < 6000, grew)
 
         run(scenario)
 
