@@ -196,7 +196,7 @@ class BusServo:
         if n < 1 or n > 83 or _type(time_ms) is not _int or time_ms >> 16:
             if _type(servos) is dict:
                 servos = servos.items()
-            n = _count("servos", servos, 83)  # or say what is wrong
+            _count("servos", servos, 83)  # or say what is wrong
             _check("time_ms", time_ms, 0, 0xFFFF)
         if self._cut_at:
             self._finish()  # before tx, which may hold its rest, is overwritten
