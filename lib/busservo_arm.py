@@ -15,10 +15,12 @@
 # is the hand's angle from the horizontal: 0 straight out, -90 straight down. The joints'
 # degrees are busservo_motion's: calibrate each joint's direction and trim to these.
 #
-# Floats are heap objects on most ports: a solve allocates. The line's step() solves only
-# when the wire can take a frame, and streams through one dict made in Arm().
+# Floats are heap objects on most ports: a solve allocates. A line solves its points when it is
+# made (one every 2 mm); its step() goes straight in the joints between them, only when the wire
+# can take a frame, and streams through one dict made in Arm().
 import math
 import time
+from array import array
 
 import busservo_motion
 
@@ -194,11 +196,10 @@ class Arm:
         r = wr * k + hr
         return r * _cos(base), r * _sin(base), wz * k + hz + self._b
 
-    def _plane(self, r, zz, pitch, strict):
+    def _plane(self, r, zz, pitch):
         # Solve in the arm's plane for the tool point r mm out from the base's axis, zz mm
-        # above the shoulder's, at pitch: self._s, _e, _w, and True; or False, and why in
-        # self._why. Not strict (a line's step): past the reach or a limit, the nearest
-        # (the robot clamps to the limits, and counts).
+        # above the shoulder's, at pitch: self._s, _e, _w, and True; or False (past the reach
+        # or a joint's limits), and why in self._why.
         # Floats are heap objects: each float operation here allocates, so the terms that do
         # not change are worked out once (Arm()), and no tuple is built unless it fails.
         if pitch != self._hand_pitch:  # the hand, in the plane: the same for the same pitch
@@ -212,15 +213,13 @@ class Arm:
         d2 = wr * wr + wz * wz
         c = (d2 - self._uf2) / self._2uf
         if c > 1 or c < -1:
-            if strict:
-                u = self._u
-                d = _sqrt(d2)
-                if c > 1:
-                    self._why = (-1, d, d - u - f, u + f)
-                else:
-                    self._why = (-1, d, abs(u - f) - d, abs(u - f))
-                return False
-            c = 1.0 if c > 1 else -1.0
+            u = self._u
+            d = _sqrt(d2)
+            if c > 1:
+                self._why = (-1, d, d - u - f, u + f)
+            else:
+                self._why = (-1, d, abs(u - f) - d, abs(u - f))
+            return False
         # The elbow's angle e has cos(e) = c, elbow up 0..180 degrees.
         e = _acos(c)
         if not self.elbow_up:
@@ -236,17 +235,16 @@ class Arm:
         if w > 180 or w <= -180:
             w = _wrap(w)
         self._w = w
-        if strict:
-            joints = self._joints
-            joint = joints[1]
-            if s < joint.lo or s > joint.hi:
-                return self._beyond(1, s)
-            joint = joints[2]
-            if e < joint.lo or e > joint.hi:
-                return self._beyond(2, e)
-            joint = joints[3]
-            if w < joint.lo or w > joint.hi:
-                return self._beyond(3, w)
+        joints = self._joints
+        joint = joints[1]
+        if s < joint.lo or s > joint.hi:
+            return self._beyond(1, s)
+        joint = joints[2]
+        if e < joint.lo or e > joint.hi:
+            return self._beyond(2, e)
+        joint = joints[3]
+        if w < joint.lo or w > joint.hi:
+            return self._beyond(3, w)
         return True
 
     def _beyond(self, i, value):
@@ -322,12 +320,12 @@ class Arm:
                 self._tried(r, zz, phi)
             self._why, self._why_pitch = self._worst
             return None
-        self._plane(r, zz, found, True)
+        self._plane(r, zz, found)
         return found
 
     def _tried(self, r, zz, pitch):
-        # _plane(), strict, keeping the least bad failure seen.
-        if self._plane(r, zz, pitch, True):
+        # _plane(), keeping the least bad failure seen.
+        if self._plane(r, zz, pitch):
             return True
         if self._worst is None or self._why[2] < self._worst[0][2]:
             self._worst = (self._why, pitch)
@@ -452,7 +450,7 @@ class Arm:
                     pitch = self._pitch(r, zz)
                     if pitch is None:
                         raise ValueError(self._refusal(x, y, z, None))
-                elif not self._plane(r, zz, pitch, True):
+                elif not self._plane(r, zz, pitch):
                     raise ValueError(self._refusal(x, y, z, pitch))
                 self._a = base
                 if ms is not solve:
@@ -522,9 +520,10 @@ class Arm:
     def line_to(self, x, y, z, pitch=None, mm_s=50):
         """A Line: the tool point along a straight line from where the arm last went (read
         first if not known) to x, y, z mm, at mm_s, the pitch turning evenly to pitch (None:
-        the reachable pitch nearest -90 at the end). The whole line is checked first: a
-        point on it the arm cannot reach raises ValueError naming it, and nothing is sent.
-        Call the Line's step() from a loop, or await it."""
+        the reachable pitch nearest -90 at the end). The whole line is checked first, and
+        solved every 2 mm (8 bytes a point: 4 KB at most): a point on it the arm cannot reach
+        raises ValueError naming it, and nothing is sent. Call the Line's step() from a
+        loop, or await it."""
         return Line(self, x, y, z, pitch, mm_s)
 
 
@@ -551,37 +550,51 @@ class Line:
         n = math.ceil(max(length, abs(dp), 1) / _CHECK_MM)
         n = min(n, _CHECKS_MAX)
         self.ms = arm._distance(end) * 1000 / mm_s
-        before = at
         joints = arm._joints
-        for k in range(1, n + 1):
-            u = k / n
-            px, py, pz, pp = x0 + dx * u, y0 + dy * u, z0 + dz * u, p0 + dp * u
-            try:
-                pose = arm.pose(px, py, pz, pp)
-            except ValueError as e:
-                raise ValueError(
-                    "the line from (%.1f, %.1f, %.1f) to (%.1f, %.1f, %.1f) mm leaves the reach"
-                    " at %s" % (x0, y0, z0, x, y, z, e)
-                )
-            now = [pose[name] for name in JOINTS]
+        # The joints' degrees at each point checked, in hundredths (0.06 mm at the arm's full
+        # reach), within their limits: a step goes straight in the joints between the two
+        # points around it rather than solving (8 bytes a point, and 4 KB at most).
+        points = array("h")
+        before = at
+        for k in range(n + 1):
+            if k:
+                u = k / n
+                px, py, pz, pp = x0 + dx * u, y0 + dy * u, z0 + dz * u, p0 + dp * u
+                try:
+                    pose = arm.pose(px, py, pz, pp)
+                except ValueError as e:
+                    raise ValueError(
+                        "the line from (%.1f, %.1f, %.1f) to (%.1f, %.1f, %.1f) mm leaves the"
+                        " reach at %s" % (x0, y0, z0, x, y, z, e)
+                    )
+                now = [pose[name] for name in JOINTS]
+            else:
+                now = at
             for i in range(4):
-                dps = joints[i].dps
+                joint = joints[i]
+                c = round(now[i] * 100)  # back within the limits if rounding took it past
+                if c / 100 < joint.lo:
+                    c += 1
+                elif c / 100 > joint.hi:
+                    c -= 1
+                points.append(c)
+                dps = joint.dps
                 if dps:  # with a margin: the robot's stream rounds to whole positions
                     self.ms = max(self.ms, n * abs(now[i] - before[i]) * 1000 / (_DPS * dps))
             before = now
         self.ms = math.ceil(self.ms - 1e-6)
+        self._points = points
+        self._n = n
+        self._last = end  # the last frame's degrees, exactly
         self.updates = 0  # frames of this line sent
         self.done = False
-        self._dx, self._dy, self._dz, self._dp = dx, dy, dz, dp
-        self._from = (x0, y0, z0 - arm._b, p0)  # z from the shoulder's axis, for the solve
         self._t = -1  # the line's time at the last target streamed, in ms (-1: none yet)
         self._sent = 0  # ticks_ms then
         self._stepped = time.ticks_ms()
         robot = self.robot
-        # The robot's stream() and the arm's plane solve, looked up once, here (the bus is
-        # looked up each step: a program may open its port again, and robot.step() uses it).
-        self._steps = self._stepper(robot.stream, arm._plane)
-        arm._pose["base"] = at[0]  # kept while the line runs along the base's axis
+        # The robot's stream(), looked up once, here (the bus is looked up each step: a
+        # program may open its port again, and robot.step() uses it).
+        self._steps = self._stepper(robot.stream)
         self._err = None  # what step() raised, for it to raise again
         if robot.player:
             robot.player.stop()
@@ -589,8 +602,9 @@ class Line:
 
     def step(self):
         """From the control loop: if the wire can take a frame, stream the point the line
-        has reached (solved now) and send it with robot.step(). Never waits; solves nothing
-        while the wire is busy. True if it sent."""
+        has reached (the joints straight between the two points around it, solved when the
+        line was made) and send it with robot.step(). Never waits; works out nothing while
+        the wire is busy. True if it sent."""
         if self.done:
             return False
         # The work is in _steps, a generator made once (Line()), as Arm.move_to()'s is.
@@ -601,18 +615,19 @@ class Line:
             raise e
         return sent
 
-    def _stepper(self, stream, plane):
+    def _stepper(self, stream):
         # step()'s work, a call a turn: True if it sent, or False (and what it raised in
         # self._err). What does not change along the line, and the module's names it uses,
-        # are its locals, looked up once; the robot's stream() and the arm's plane solve come
-        # bound, from Line() (so that nothing here raises outside the try below: that would
-        # end the generator, and each later step() raise StopIteration).
+        # are its locals, looked up once; the robot's stream() comes bound, from Line() (so
+        # that nothing here raises outside the try below: that would end the generator, and
+        # each later step() raise StopIteration).
         robot = self.robot
         arm = self.arm
         pose = arm._pose
-        x0, y0, zz0, p0 = self._from
-        dx, dy, dz, dp = self._dx, self._dy, self._dz, self._dp
-        atan2, sqrt, deg, late_ms = _atan2, _sqrt, _DEG, _LATE_MS
+        points = self._points
+        n = self._n
+        last = self._last
+        late_ms = _LATE_MS
         while True:
             sent = False
             try:
@@ -631,35 +646,45 @@ class Line:
                         dt = time.ticks_diff(now, self._sent)
                         t += dt if dt < late_ms else late_ms
                     ms = self.ms
-                    u = t / ms if ms and t < ms else 1.0
-                    # (Floats are heap objects: no sum where 0 is added.)
-                    x = x0 + dx * u if dx else x0
-                    y = y0 + dy * u if dy else y0
-                    zz = zz0 + dz * u if dz else zz0
-                    pitch = p0 + dp * u if dp else p0
-                    if x or y:
-                        pose["base"] = atan2(y, x) * deg
-                    plane(sqrt(x * x + y * y), zz, pitch, False)
-                    pose["shoulder"] = s = arm._s
-                    pose["elbow"] = e = arm._e
-                    pose["wrist"] = w = arm._w
+                    if t < ms:
+                        # Between points k and k + 1, r / ms of the way, rounded to whole
+                        # hundredths of a degree: ints, so that only the four degrees
+                        # streamed are floats.
+                        q = t * n
+                        k = q // ms
+                        r = 2 * (q - k * ms)
+                        k *= 4
+                        ms2 = 2 * ms
+                        a = points[k]
+                        pose["base"] = b = (a + ((points[k + 4] - a) * r + ms) // ms2) / 100
+                        a = points[k + 1]
+                        pose["shoulder"] = s = (a + ((points[k + 5] - a) * r + ms) // ms2) / 100
+                        a = points[k + 2]
+                        pose["elbow"] = e = (a + ((points[k + 6] - a) * r + ms) // ms2) / 100
+                        a = points[k + 3]
+                        pose["wrist"] = w = (a + ((points[k + 7] - a) * r + ms) // ms2) / 100
+                    else:  # the end, exactly
+                        pose["base"] = b = last["base"]
+                        pose["shoulder"] = s = last["shoulder"]
+                        pose["elbow"] = e = last["elbow"]
+                        pose["wrist"] = w = last["wrist"]
                     stream(pose)
                     if robot.step():
                         self._t = t
                         self._sent = now
                         self.updates += 1
                         at = arm._at
-                        at[0] = pose["base"]
+                        at[0] = b
                         at[1] = s
                         at[2] = e
                         at[3] = w
-                        if u >= 1:
+                        if t >= ms:
                             self._end()
                         sent = True
             except BaseException as err:  # (Ctrl-C too: step() raises it)
                 self._err = err
                 if _awaitable:  # CPython: as in Arm._mover()
-                    self._steps = self._stepper(stream, plane)
+                    self._steps = self._stepper(stream)
             yield sent
 
     def stop(self):

@@ -104,9 +104,10 @@ class Arm:
     ) -> Line:
         """A Line: the tool point along a straight line from where the arm last went (read
         first if not known) to x, y, z mm at mm_s, the pitch turning evenly to pitch (None:
-        the reachable pitch nearest -90 at the end). The whole line is checked first: a point
-        on it the arm cannot reach raises ValueError naming it, and nothing is sent. A joint's
-        dps slows the whole line. Nothing moves until its step()."""
+        the reachable pitch nearest -90 at the end). The whole line is checked first, and
+        solved every 2 mm (8 bytes a point: 4 KB at most): a point on it the arm cannot reach
+        raises ValueError naming it, and nothing is sent. A joint's dps slows the whole line.
+        Nothing moves until its step()."""
 
 class Line:
     """A straight line playing: call step() from a loop, or await it (await line, or await
@@ -143,9 +144,10 @@ class Line:
         """As arm.line_to(x, y, z, pitch, mm_s). A new line stops the robot's player."""
     def step(self) -> bool:
         """From the control loop: if the wire can take a frame (or will before the next
-        step()), solve the point the line has reached and send it, with robot.stream() and
-        robot.step(). Never waits; solves only when it sends; allocates nothing when the wire
-        is busy. True if it sent. A late loop slows the line rather than cutting across."""
+        step()), send the point the line has reached, with robot.stream() and robot.step():
+        the joints straight between the two points around it, solved when the line was made.
+        Never waits; allocates nothing when the wire is busy. True if it sent. A late loop
+        slows the line rather than cutting across."""
     def stop(self) -> None:
         """End the line: the tool point stops at the last point sent (reached within that
         frame's time). Nothing is sent; targets streamed but not sent are dropped."""

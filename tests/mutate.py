@@ -1565,9 +1565,8 @@ MUTANTS = {
         ),
         (
             "plane-limits-unchecked",
-            "            if s < joint.lo or s > joint.hi:\n                return"
-            " self._beyond(1, s)",
-            "            if False:\n                return self._beyond(1, s)",
+            "        if s < joint.lo or s > joint.hi:\n            return self._beyond(1, s)",
+            "        if False:\n            return self._beyond(1, s)",
             "a pose past the shoulder's limit is taken: the robot clamps it, the tool point goes"
             " elsewhere (into the table)",
         ),
@@ -1619,10 +1618,10 @@ MUTANTS = {
         ),
         (
             "line-checks-the-end-only",
-            "        for k in range(1, n + 1):",
-            "        for k in range(n, n + 1):",
+            "                    pose = arm.pose(px, py, pz, pp)",
+            "                    pose = arm.pose(px, py, pz, pp) if k == n else end",
             "a line whose ends are in reach but whose middle is not starts, and the arm cuts "
-            "across (the robot clamps)",
+            "across (straight in the joints to the end)",
         ),
         (
             "line-dps-ignored",
@@ -1653,8 +1652,8 @@ MUTANTS = {
         ),
         (
             "line-base-mirrored",
-            '                        pose["base"] = atan2(y, x) * deg',
-            '                        pose["base"] = atan2(-y, x) * deg',
+            '                        pose["base"] = b = (a + (',
+            '                        pose["base"] = b = -(a + (',
             "a line runs mirrored across the x axis",
         ),
         (
