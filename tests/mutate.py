@@ -1478,7 +1478,7 @@ MUTANTS = {
         (
             "calibration-stream-goes-on",
             "        panel.order(self)  # the stream, a jog or a sequence ends",
-            "        panel.orders += 1",
+            "        panel.orders += 1  # the stream, a jog or a sequence ends",
             "a calibration started under a drag or a jog: the stream moves the limp arm",
         ),
         (

@@ -76,8 +76,7 @@ def run(scenario):
     port = free_port()  # no other run's, at the same time
 
     async def main():
-        server = asyncio.create_task(busservo_web.serve(robot, PASSWORD, port))
-        await asyncio.sleep_ms(50)
+        server = await serving(busservo_web.serve(robot, PASSWORD, port))
         try:
             await scenario(port, world, robot)
         finally:
@@ -86,6 +85,29 @@ def run(scenario):
 
     asyncio.new_event_loop()
     asyncio.run(main())
+
+
+async def serving(serve):
+    """The task of serve (busservo_web.serve(...)), once its server listens: a fixed wait was
+    too short on a loaded machine (the first request refused)."""
+    start = busservo_web.asyncio.start_server
+    listening = []
+
+    async def started(*args):
+        server = await start(*args)
+        listening.append(server)
+        return server
+
+    busservo_web.asyncio.start_server = started
+    try:
+        task = asyncio.create_task(serve)
+        for _ in range(1000):
+            await asyncio.sleep_ms(5)
+            if listening or task.done():
+                break
+    finally:
+        busservo_web.asyncio.start_server = start
+    return task
 
 
 def away(scenario):
@@ -834,7 +856,8 @@ class Driving(Tidy):
             await asyncio.sleep_ms(800)  # on its way to 40 degrees
             status, reply = await http(port, "POST", "/api/stop", {}, token)
             self.assertEqual(status, 200, reply)
-            await asyncio.sleep_ms(100)  # the halt's frame, across the wire
+            # The halt's frame, across the wire (the positions read first).
+            await until(lambda: moves(world)[-1][5] | moves(world)[-1][6] << 8 == 100)
             halt = moves(world)[-1]
             self.assertEqual((halt[3], halt[5] | halt[6] << 8, halt[7]), (CMD_SERVO_MOVE, 100, 1))
             self.assertEqual(world.sim.limp, {2, 3, 4})  # still limp: not stiffened
@@ -1538,9 +1561,7 @@ def on_arm(scenario, links=LINKS, robot_of=arm_robot, **options):
     port = free_port()
 
     async def main():
-        serving = busservo_web.serve(robot, PASSWORD, port, path=path, **options)
-        server = asyncio.create_task(serving)
-        await asyncio.sleep_ms(50)
+        server = await serving(busservo_web.serve(robot, PASSWORD, port, path=path, **options))
         try:
             await scenario(port, world, robot, path)
         finally:
