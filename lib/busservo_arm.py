@@ -543,11 +543,13 @@ class Line:
         self.start = (x0, y0, z0, p0)
         self.end = (x, y, z, p1)
         self.mm_s = mm_s
-        # Check the line every _CHECK_MM (mm, and degrees of pitch), and time it: mm_s for
-        # the tool point and the wrist, and no joint faster than _DPS of its dps.
+        # Check the line every _CHECK_MM of the wrist's way at most (the tool point's, and
+        # the hand's length turning with the pitch: 2.6 mm a degree for a hand of 150 mm;
+        # and degrees of pitch), and time it: mm_s for the tool point and the wrist, and no
+        # joint faster than _DPS of its dps.
         dx, dy, dz, dp = x - x0, y - y0, z - z0, _wrap(p1 - p0)  # the short way round
         length = _sqrt(dx * dx + dy * dy + dz * dz)
-        n = math.ceil(max(length, abs(dp), 1) / _CHECK_MM)
+        n = math.ceil(max(length + arm._h * abs(dp) * _RAD, abs(dp), 1) / _CHECK_MM)
         n = min(n, _CHECKS_MAX)
         self.ms = arm._distance(end) * 1000 / mm_s
         joints = arm._joints

@@ -603,6 +603,33 @@ class Lines(Tidy):
         self.assertTrue(all(b >= a - 0.3 for a, b in zip(pitches, pitches[1:])), pitches)
         self.assertTrue(abs(pitches[-1] - end_pitch) <= 0.5, (pitches[-1], end_pitch))
 
+    def test_a_pitch_turn_in_place_keeps_the_tool_point_still(self):
+        # No travel, the hand turning 67 degrees to the end's own pitch (the wrist at the
+        # edge of the reach, the elbow straight): the wrist goes 176 mm round the tool point,
+        # 2.6 mm a degree. Points 2 degrees apart were 5 mm apart for the wrist, and going
+        # straight in the joints between them took the tool point 1.24 mm off (1.63 mm in
+        # the frames sent) near the edge, where the elbow straightens.
+        w, bus = world()
+        a = arm(bus)
+        here = (102.1, -229.5, -6.7)
+        a.move_to(*here, pitch=0, ms=0)
+        settle(w, bus, 50)
+        streamed = []
+        stream = a.robot.stream
+
+        def spy(pose):
+            streamed.append(a.point(pose))
+            return stream(pose)
+
+        a.robot.stream = spy  # before line_to(): the line binds it when it is made
+        line = a.line_to(*here, mm_s=50)
+        self.assertTrue(line.end[3] < -60, line.end)
+        self.follow(w, bus, line)
+        self.assertTrue(len(streamed) >= 150, len(streamed))
+        off = max(math.sqrt(sum((p - q) ** 2 for p, q in zip(s[:3], here))) for s in streamed)
+        self.assertTrue(off <= 0.5, off)  # what the line streamed, before a position's rounding
+        self.assertEqual(a.robot.clamped, 0)
+
     def test_a_joints_dps_slows_the_whole_line(self):
         # The base turns fastest where the line passes nearest its axis, 0.48 degree a mm: at
         # 90 % of 60 degrees/s (a margin for the robot's rounding) the line goes at 113 mm/s,
