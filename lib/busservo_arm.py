@@ -557,7 +557,9 @@ class Line:
         # reach), within their limits: a step goes straight in the joints between the two
         # points around it rather than solving (8 bytes a point, and 4 KB at most).
         points = array("h")
-        before = at
+        # Point 0: where the arm is, each joint's angle within a turn (a servo may report a
+        # position far out) and within its limits (as the robot would clamp it).
+        before = [min(max(_wrap(at[i]), joints[i].lo), joints[i].hi) for i in range(4)]
         for k in range(n + 1):
             if k:
                 u = k / n
@@ -571,7 +573,7 @@ class Line:
                     )
                 now = [pose[name] for name in JOINTS]
             else:
-                now = at
+                now = before
             for i in range(4):
                 joint = joints[i]
                 c = round(now[i] * 100)  # back within the limits if rounding took it past

@@ -589,6 +589,29 @@ class Lines(Tidy):
         self.assertTrue(near(points[-1][:3], end, 0.5), points[-1])
         self.assertEqual(a.robot.clamped, 0)
 
+    def test_a_line_from_a_position_reported_turns_out_starts_where_the_arm_is(self):
+        # A servo may report a position far outside its range (positions are signed 16-bit):
+        # the base read as 3560 degrees, ten turns past where it is. The line starts from
+        # where the arm is (the angle within a turn), so every frame keeps to the line and
+        # nothing is clamped.
+        w, bus = world()
+        a = arm(bus)
+        a.move_to(*self.START, pitch=-90, ms=0)
+        settle(w, bus, 50)
+        joints = a.robot.joints
+        positions = {j.servo_id: w.sim.position(j.servo_id) for j in joints.values()}
+        base = joints["base"]
+        positions[base.servo_id] += round(3600 * base.per_degree)  # 10 turns on
+        self.assertTrue(near(a.where(positions)[:3], self.START, 0.5))
+        first = w.frames_total
+        line = a.line_to(*self.END, pitch=-90, mm_s=50)
+        self.follow(w, bus, line)
+        points = [sent_point(a, frame_positions(f)) for f in w.frames(first)]
+        self.assertTrue(len(points) >= 190, len(points))
+        for p in points:
+            self.assertTrue(off_line(p[:3], self.START, self.END) <= 1, p)
+        self.assertEqual(a.robot.clamped, 0)
+
     def test_no_pitch_turns_the_hand_evenly_to_the_ends_own(self):
         w, bus = world()
         a = arm(bus)
