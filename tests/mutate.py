@@ -1670,6 +1670,19 @@ MUTANTS = {
             "after line.stop(), a point streamed but not yet sent goes with the next "
             "robot.step(): the arm moves on",
         ),
+        (
+            "line-start-as-read",
+            "before = [min(max(_wrap(at[i]), joints[i].lo), joints[i].hi) for i in range(4)]",
+            "before = list(at)",
+            "a servo that reports a position turns out: the line's first frames swing the joint "
+            "round (or overflow its point: OverflowError on CPython)",
+        ),
+        (
+            "line-points-by-pitch-alone",
+            "max(length + arm._h * abs(dp) * _RAD, abs(dp), 1)",
+            "max(length, abs(dp), 1)",
+            "a pitch turn near the edge of the reach: the tool point wanders over a mm off",
+        ),
     ],
     "busservo_calibrate": [
         (
