@@ -7,6 +7,7 @@
 #   uart.chunks = [1]                          # readinto() hands out 1 byte a call
 #   uart.takes = [3, None]                     # write() takes 3 bytes, then none, then all
 #   uart.written()                             # every byte the driver wrote
+#   with SimulatedTime() as clock: ...         # the driver and the fake on simulated time
 #
 # Like machine.UART, read() and readinto() return None when nothing is waiting
 # and any() counts the bytes waiting. any(), readinto() and write() allocate
@@ -20,6 +21,28 @@
 import time
 
 BYTE_US = 1042  # 10 bits at 9600 baud, rounded up
+
+
+class SimulatedTime:
+    """with SimulatedTime() as clock: the driver (busservo) and FakeUART on clock, a
+    tests/wire.py Clock, which moves on only as the driver sleeps (and 1 us a ticks read).
+    Where a test measures time (a query that must not wait, a deadline the UART's pace
+    sets), what it measures is then the driver's, however busy the machine is."""
+
+    def __enter__(self):
+        global time
+        import busservo
+        import wire
+
+        self._saved = busservo.time, time
+        busservo.time = time = self.clock = wire.Clock()
+        return self.clock
+
+    def __exit__(self, *exc):
+        global time
+        import busservo
+
+        busservo.time, time = self._saved
 
 
 class FakeUART:

@@ -6,7 +6,7 @@ import sys
 import unittest
 
 import busservo
-from fakeuart import FakeUART
+from fakeuart import FakeUART, SimulatedTime
 
 
 class Commands(unittest.TestCase):
@@ -154,10 +154,12 @@ class Commands(unittest.TestCase):
 
     def test_a_frame_the_uart_takes_in_parts_leaves_whole_and_once(self):
         # A full transmit buffer: write() takes 3 bytes, then none, then 4, then the rest.
-        self.uart.takes = [3, None, None, 4]
-        self.bus.move(1, 800, 1000)
+        with SimulatedTime():  # (the driver's deadline is the wire's, not a busy machine's)
+            uart = FakeUART()
+            uart.takes = [3, None, None, 4]
+            busservo.BusServo(uart).move(1, 800, 1000)
         self.assertEqual(
-            self.uart.written(),
+            uart.written(),
             bytes((0x55, 0x55, 0x08, 0x03, 0x01, 0xE8, 0x03, 0x01, 0x20, 0x03)),
         )
 

@@ -12,7 +12,7 @@ from busservo import (
     CMD_GET_BATTERY_VOLTAGE,
     CMD_MULT_SERVO_POS_READ,
 )
-from fakeuart import FakeUART
+from fakeuart import FakeUART, SimulatedTime
 from test_frames import ALL_500, BATTERY_7500, COMPLETE_8_ONCE, POSITIONS_ALL_500, RUN_8_ONCE, STOP
 
 GET_BATTERY = bytes((0x55, 0x55, 0x02, 0x0F))
@@ -166,13 +166,16 @@ class Queries(unittest.TestCase):
         self.assertEqual((self.bus.battery, self.bus.positions), (7500, ALL_500))
 
     def test_more_frames_than_the_queue_holds_are_counted_not_hidden(self):
-        self.uart.reply(GET_BATTERY, STOP * 40 + BATTERY_7500)  # 173 ms on the wire
-        self.assertEqual(self.bus.read_battery(timeout_ms=300), 7500)
-        held = 0
-        while self.bus.poll() is not None:
-            held += 1
+        with SimulatedTime():  # (the wire's 173 ms, not a busy machine's)
+            uart = FakeUART()
+            bus = busservo.BusServo(uart)
+            uart.reply(GET_BATTERY, STOP * 40 + BATTERY_7500)  # 173 ms on the wire
+            self.assertEqual(bus.read_battery(timeout_ms=300), 7500)
+            held = 0
+            while bus.poll() is not None:
+                held += 1
         self.assertEqual(held, 32)
-        self.assertEqual(self.bus.lost, 8)
+        self.assertEqual(bus.lost, 8)
 
     def test_queries_on_ticks_past_2_to_the_30(self):
         # The unix port's ticks run to 2**62 (its clock counts from the machine's boot): after
@@ -304,13 +307,14 @@ class APeerFasterThanTheWire(unittest.TestCase):
         # one; if the query's own never comes, it was the query's after all.
         uart = FakeUART(at_once=True)
         bus = busservo.BusServo(uart)
-        self.assertTrue(timed_out(lambda: bus.read_battery(timeout_ms=20)))  # unplugged
-        uart.reply(GET_BATTERY, BATTERY_7500)  # and plugged in again
-        self.assertEqual(bus.read_battery(timeout_ms=20), 7500)
-        start = time.ticks_ms()
-        for _ in range(5):
+        with SimulatedTime() as clock:  # (the driver's waits, not a busy machine's)
+            self.assertTrue(timed_out(lambda: bus.read_battery(timeout_ms=20)))  # unplugged
+            uart.reply(GET_BATTERY, BATTERY_7500)  # and plugged in again
             self.assertEqual(bus.read_battery(timeout_ms=20), 7500)
-        self.assertTrue(time.ticks_diff(time.ticks_ms(), start) < 100)
+            start = clock.ticks_ms()
+            for _ in range(5):
+                self.assertEqual(bus.read_battery(timeout_ms=20), 7500)
+            self.assertTrue(clock.ticks_diff(clock.ticks_ms(), start) < 100)
 
     def test_a_query_ends_at_its_time_while_frames_come_faster_than_they_are_read(self):
         # A peer at USB speed that sends frames back to back (STOPs here), with a request in
