@@ -36,6 +36,10 @@
 # Wi-Fi can read the password. Use a network you trust, or the board's own access point
 # with a WPA2 key.
 #
+# RAM: the core and its parts use loops where a comprehension would do: on MicroPython
+# each comprehension is a function of its own (about 60 bytes of a 32-bit heap kept with
+# the module, and made again at each call).
+#
 # The loop never waits on the wire: the positions a route needs are read with the
 # driver's ask(), a step every few ms (Panel.positions()), so the stream, the dead-man
 # and the other pages go on while the reply is on its way.
@@ -97,6 +101,7 @@
 #                                       (busservo_web_record's teleop reads "leader")
 #   Refused(status, why), need(body, key, kind, low, high, what): refusals, and checks
 import asyncio
+import binascii
 import gc
 import json
 import os
@@ -179,7 +184,10 @@ def _routes(kind):
     # alone: MicroPython keeps, for good, every name getattr() is asked for, and a page
     # asking for made-up routes would fill the heap. Read once a class (Panel._known): on
     # MicroPython each read of a class's __dict__ makes a copy of it.
-    names = [n for n in kind.__dict__ if n.lstrip("_")[:4] in ("get_", "post")]
+    names = []
+    for n in kind.__dict__:
+        if n.lstrip("_")[:4] in ("get_", "post"):
+            names.append(n)
     for base in kind.__bases__:
         if base is not object:
             names += _routes(base)
@@ -388,11 +396,8 @@ class Panel:
         # The calibration file: an arm's links, and where a calibration goes.
         self.path = path or bm.CALIBRATION
         self.page = page or PAGE
-        self.robot = robot
         self.bus = robot.bus
-        self._ids = [robot.joints[name].servo_id for name in robot.names]
-        self.to = {}  # {name: degrees} each joint was last sent towards (the thumbs follow)
-        self.robots = 1  # robots the panel has had (a calibration saved gives it another)
+        self.robots = 0  # robots the panel has had (a calibration saved gives it another)
         self.limp = False  # joints let go by a limp or a STOP, until the next move
         self.armed = None  # the token of the page that armed, or None
         self.busy = None  # (part, why) while a part holds the joints, else None
@@ -421,6 +426,7 @@ class Panel:
         # (the loop cuts those past their time); how many requests are being answered.
         self._conns = []
         self._clients = 0
+        self.adopt(robot)  # (the robot, its servos' ids, to; no part is waiting yet)
         for part in parts:
             self.plug(*part)
 
@@ -451,7 +457,11 @@ class Panel:
             return  # plugged in at once (the program's parts): it stays, or it would be gone
         part = self.parts.pop(module, None)
         if part is not None:  # a new list: a loop over the parts (order()) goes on as it was
-            self._parts = [p for p in self._parts if p is not part]
+            parts = []
+            for p in self._parts:
+                if p is not part:
+                    parts.append(p)
+            self._parts = parts
             self._known = {}  # its class kept there would keep its module
             self.unload(module)
 
@@ -530,7 +540,10 @@ class Panel:
         try:
             for _ in bus.ask(ids):
                 await asyncio.sleep_ms(_ASK_MS)
-            return {i: bus.positions.get(i) for i in ids}
+            got = {}
+            for i in ids:
+                got[i] = bus.positions.get(i)
+            return got
         finally:
             self._asking = False
 
@@ -539,7 +552,10 @@ class Panel:
         read as positions() reads."""
         robot = self.robot
         names = robot.names if names is None else names
-        got = await self.positions([robot.joints[name].servo_id for name in names])
+        ids = []
+        for name in names:
+            ids.append(robot.joints[name].servo_id)
+        got = await self.positions(ids)
         return robot.where(names, got)  # what came: it does not ask again
 
     def halt(self, names):
@@ -560,8 +576,10 @@ class Panel:
         """Drive robot from now on (the calibration just saved): the page reads its joints
         again."""
         self.robot = robot
-        self._ids = [robot.joints[name].servo_id for name in robot.names]
-        self.to = {}
+        self._ids = []
+        for name in robot.names:
+            self._ids.append(robot.joints[name].servo_id)
+        self.to = {}  # {name: degrees} each joint was last sent towards (the thumbs follow)
         self.robots += 1
         for module, condition in self._lazy:
             if condition(self):
@@ -587,7 +605,7 @@ class Panel:
         if type(password) is not str or not _same(password.encode(), self._password):
             wrong[client] = wrong.get(client, 0) + 1
             return None
-        token = "".join("%02x" % b for b in os.urandom(16))
+        token = binascii.hexlify(os.urandom(16)).decode()
         sessions = self._sessions
         sessions.append([token, now, None])
         if len(sessions) > _SESSIONS:  # the oldest forgotten, but not the armed page's
@@ -633,10 +651,13 @@ class Panel:
         robot = self.robot
         positions = self.bus.positions
         at = []
+        to = [] if self.to else None
         for name in robot.names:
             joint = robot.joints[name]
             p = positions.get(joint.servo_id)
             at.append(None if p is None else round(joint.degrees(p), 1))
+            if to is not None:
+                to.append(self.to.get(name))
         if self.error and time.ticks_diff(time.ticks_ms(), self._error_at) > _ERROR_MS:
             self.error = None  # over: it has not happened again for a while
         lost = None
@@ -645,7 +666,7 @@ class Panel:
                 lost = session[2]
         out = {
             "at": at,
-            "to": [self.to.get(name) for name in robot.names] if self.to else None,
+            "to": to,
             "robots": self.robots,  # the page reads the joints again when this grows
             "battery": self.bus.battery,
             "armed": self.armed is not None,
@@ -862,7 +883,10 @@ class Panel:
 
     async def _get_joints(self, body, token):
         joints = self.robot.joints
-        return [{"name": n, "lo": joints[n].lo, "hi": joints[n].hi} for n in self.robot.names]
+        out = []
+        for n in self.robot.names:
+            out.append({"name": n, "lo": joints[n].lo, "hi": joints[n].hi})
+        return out
 
     async def _get_state(self, body, token):
         return self.state(token)

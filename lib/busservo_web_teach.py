@@ -33,7 +33,7 @@ def _name(body):
     if (
         type(name) is not str
         or not 1 <= len(name) <= NAME_MAX
-        or not all(c in _NAME_CHARS for c in name)
+        or name.strip(_NAME_CHARS)  # a character not among them
     ):
         raise web.Refused(
             400, "name must be 1..%d letters, digits, - or _, got %r" % (NAME_MAX, name)
@@ -101,7 +101,9 @@ class Teach:
     # What the core calls.
 
     def state(self, out, token):
-        out["steps"] = [ms for _, ms in self.sequence.steps]
+        steps = out["steps"] = []
+        for _, ms in self.sequence.steps:
+            steps.append(ms)
         out["edits"] = self.edits
         out["playing"] = self.player.index if self.player else None
 
@@ -159,7 +161,10 @@ class Teach:
         return self._changed(token)
 
     async def get_steps(self, body, token):
-        return [{"pose": pose, "ms": ms} for pose, ms in self.sequence.steps]
+        steps = []
+        for pose, ms in self.sequence.steps:
+            steps.append({"pose": pose, "ms": ms})
+        return steps
 
     async def post_play(self, body, token):
         speed = 1.0 if body.get("speed") is None else web.need(body, "speed", float, 0.1, 10)
@@ -176,7 +181,12 @@ class Teach:
             names = os.listdir(FOLDER)
         except OSError:
             names = []
-        return sorted(n[:-5] for n in names if n.endswith(".json"))
+        found = []
+        for n in names:
+            if n.endswith(".json"):
+                found.append(n[:-5])
+        found.sort()
+        return found
 
     async def post_save(self, body, token):
         path = _name(body)
