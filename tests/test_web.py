@@ -298,6 +298,28 @@ class Package(Tidy):
         finally:
             sh("rm -rf " + folder)
 
+    def test_the_modules_it_loads_at_once_use_loops_not_comprehensions(self):
+        # RAM: on MicroPython each comprehension (and each lambda) is a function of its own,
+        # kept with its module (about 45 bytes of a 32-bit heap), so the modules the panel
+        # without an arm loads use loops (busservo_web's and busservo_motion's headers).
+        try:
+            import ast
+        except ImportError:
+            raise unittest.SkipTest("CPython's ast reads the sources")
+        kept = {"busservo_web": 3}  # PARTS' two conditions, and serve()'s connection hook
+        for name in (
+            "busservo",
+            "busservo_motion",
+            "busservo_web",
+            "busservo_web_sliders",
+            "busservo_web_teach",
+        ):
+            with open("lib/%s.py" % name) as f:
+                tree = ast.parse(f.read())
+            kinds = (ast.ListComp, ast.DictComp, ast.SetComp, ast.GeneratorExp, ast.Lambda)
+            lines = [node.lineno for node in ast.walk(tree) if isinstance(node, kinds)]
+            self.assertEqual(len(lines), kept.get(name, 0), "lib/%s.py, lines %s" % (name, lines))
+
 
 class Security(Tidy):
     def test_without_the_password_every_route_is_refused_and_nothing_moves(self):
