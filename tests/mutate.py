@@ -667,7 +667,7 @@ MUTANTS = {
         (
             "home-does-not-read",
             "        self.move(pose, _CHECK)  # check it before anything is sent\n       "
-            " self._read(list(range(len(self.names))))",
+            " self._read(self._indices(None))",
             "        self.move(pose, _CHECK)  # check it before anything is sent",
             "home() after a move by hand times its soft start from a stale position",
         ),
