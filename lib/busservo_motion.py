@@ -20,8 +20,8 @@
 # small ints (Joint.position()).
 #
 # RAM: loops where a comprehension would do. On MicroPython each comprehension is a function
-# of its own, kept with the module (about 45 bytes of a 32-bit heap each, and made again at
-# each call): loops took 0.6 KB off what the module keeps.
+# of its own, kept with the module and made again at each call: loops took 0.6 KB off what
+# this module keeps on a 32-bit port.
 import errno
 import json
 import math

@@ -300,8 +300,8 @@ class Package(Tidy):
 
     def test_the_modules_it_loads_at_once_use_loops_not_comprehensions(self):
         # RAM: on MicroPython each comprehension (and each lambda) is a function of its own,
-        # kept with its module (about 45 bytes of a 32-bit heap), so the modules the panel
-        # without an arm loads use loops (busservo_web's and busservo_motion's headers).
+        # kept with its module, so the modules the panel without an arm loads use loops
+        # (busservo_web's and busservo_motion's headers say what that saves).
         try:
             import ast
         except ImportError:
