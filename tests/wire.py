@@ -13,6 +13,7 @@
 #   w.noise(b"\x55\x55\x05")         # faults: noise, drop, cut_reply, late,
 #   w.uart.fail("readinto", OSError(5)), w.uart.during(...), w.uart.stall(True)
 #   wire.World("rp2", clock=wire.RealClock(), call_us=0)   # the same, live, on real time
+#   wire.World("ftdi", busy_ms=20)   # a computer's port behind USB (LINKS), busy
 #
 # Time is whole microseconds (w.clock.now_us), and nothing real is used: the
 # same test gives the same bytes at the same times, every run. Each ticks read
@@ -120,7 +121,7 @@ _TICK_US = 10000  # a FreeRTOS tick on esp32 (100 Hz)
 # Command byte -> Length of the commands the controller takes; (per, extra):
 # Length = per * count + extra, the count being the first parameter.
 _LENGTHS = {3: (3, 5), 6: 5, 7: 2, 11: 5, 15: 2, 20: (1, 3), 21: (1, 3)}
-METHODS = ("any", "read", "readinto", "write", "flush", "txdone")
+METHODS = ("any", "read", "readinto", "write", "flush", "txdone", "wait")
 KEEP = 1000  # whole frames a world keeps, by default: 10 s of 10-byte moves
 KEEP_BYTES = 16384  # bytes received it keeps: 17 s of the wire at 9600 baud
 KEEP_LOG = 1024  # the times of the bytes received, the garbled ones, those at the pin
@@ -852,6 +853,145 @@ class _ESP32(UART):
         return (3 + self._txbuf) * 13000 * 2 // self._w.baudrate * _TICK_US
 
 
+# The computer's side of a controller on USB: the port a program opens there. A USB-serial
+# chip (an FTDI, a CH340) takes the controller's bytes off the 9600-baud wire and hands them
+# to the computer every few ms (the FTDI's latency timer, 16 ms by default), or as soon as
+# `most` wait; a HID controller answers at USB speed, a frame to a report, a report a poll of
+# its endpoint (1 ms). Each hand-over reaches the program a busy computer's 0..busy_ms later
+# (never before the one before it). name: (ms between hand-overs, bytes a hand-over carries
+# at most, a frame to a hand-over, the line's baudrate: None, the world's).
+LINKS = {
+    "ch340": (2, 62, False, None),
+    "ftdi": (16, 62, False, None),
+    "hid": (1, 64, True, 1000000),
+}
+# What a computer may add to each hand-over when it is busy: the computer's ports say their
+# latency_ms as their hand-overs' period and this (busservo_host.BUSY_MS says the same).
+BUSY_MS = 20
+
+
+class _USB(UART):
+    """A computer's port behind USB (LINKS): write() takes what it is given at once (the OS's
+    buffer is large) and the chip sends it at the baud rate; what the controller sends comes
+    to any() and readinto() in hand-overs, as above. One write in preempt[0] leaves the
+    program preempted for 0..preempt[1] ms (the clock moves on before write() returns).
+    latency_ms is what the computer's port says of itself (busservo_host, busservo_hid)."""
+
+    def __init__(self, world, link, busy_ms, preempt, seed):
+        UART.__init__(self, world, 0, 1000, "return")
+        every_ms, self._most, self._reports, _ = LINKS[link]
+        self.latency_ms = every_ms + BUSY_MS
+        self._every_us = every_ms * 1000
+        self._busy_us = busy_ms * 1000
+        self._preempt = preempt
+        self._seed = seed
+        self._phase = self._random(self._every_us)  # the chip's timer runs from its own start
+        self._chip = bytearray()  # taken off the wire, not handed over yet
+        self._tick_at = None  # the chip's next hand-over, while it holds bytes
+        self._handed = []  # [due us, bytes]: handed over, not at the program yet
+        self._due = 0  # when the last hand-over reaches the program
+        self._host = bytearray()  # at the program: what any() counts
+        self._tx_ring = _Ring(4096)
+
+    def _random(self, n):
+        # 0..n-1, the same run of them for the same seed.
+        self._seed = (self._seed * 1103515245 + 12345) & 0x7FFFFFFF
+        return (self._seed >> 8) % n if n > 0 else 0
+
+    # Receiving.
+
+    def _any(self):
+        return len(self._host)
+
+    def _io_read(self, buf, off, n):
+        host = self._host
+        k = min(n, len(host))
+        for i in range(k):
+            buf[off + i] = host[i]
+        self._host = host[k:]  # (MicroPython's bytearray has no del of a slice)
+        return k or None
+
+    def wait(self, ms):
+        """As a computer's port does: until bytes have come, or ms have passed (the clock
+        moves on meanwhile), what a blocking query does between its steps."""
+        w = self._w
+        after = self._enter("wait")
+        w._wait(self._any, w.clock.now_us + ms * 1000)
+        if after:
+            self._leave(after)
+
+    def _rx_arrive(self, t, b):
+        self._chip.append(b)
+        if self._tick_at is None:
+            every = self._every_us
+            self._tick_at = t + every - (t - self._phase) % every
+        if not self._reports and len(self._chip) >= self._most:
+            self._hand_over(t)
+
+    def _rx_start(self):
+        pass
+
+    def _take(self):
+        # What one hand-over carries: up to `most` bytes, or a report's frame (by its Length;
+        # its first `most` bytes if longer), None while the frame is still coming.
+        chip = self._chip
+        n = min(len(chip), self._most)
+        if self._reports and n and chip[0] == 0x55:
+            want = chip[2] + 2 if len(chip) > 2 else 257
+            if len(chip) < min(want, self._most):
+                return None
+            n = min(want, self._most)
+        data = bytes(chip[:n])
+        self._chip = chip[n:]
+        return data
+
+    def _hand_over(self, t):
+        data = self._take()
+        if data:
+            due = max(t + self._random(self._busy_us + 1), self._due)
+            self._due = due
+            self._handed.append([due, data])
+
+    def _rx_timer(self):
+        t = self._tick_at if self._chip else None
+        if self._handed and (t is None or self._handed[0][0] < t):
+            t = self._handed[0][0]
+        return t
+
+    def _rx_timer_fire(self, t):
+        handed = self._handed
+        while handed and handed[0][0] <= t:
+            self._host += handed.pop(0)[1]
+        if self._tick_at is not None and self._tick_at <= t:
+            self._hand_over(t)
+            self._tick_at = t + self._every_us if self._chip else None
+        while handed and handed[0][0] <= t:
+            self._host += handed.pop(0)[1]
+
+    # Sending.
+
+    def _io_write(self, mv):
+        ring = self._tx_ring
+        n = min(len(mv), ring.cap - ring.n)
+        for i in range(n):
+            ring.put(mv[i])
+        self._w._tx_kick()
+        preempt = self._preempt
+        if n and preempt and not self._random(preempt[0]):
+            self._w.clock.now_us += self._random(preempt[1] * 1000 + 1)
+        return n or None
+
+    def _tx_take(self):
+        ring = self._tx_ring
+        return ring.get() if ring.n else -1
+
+    def _tx_pending(self):
+        return self._tx_ring.n
+
+    def _flush_us(self):
+        return (self._tx_ring.cap + 1) * 10000000 // self._w.baudrate
+
+
 class World:
     """A board's UART (w.uart), the wire, and a SimController (w.sim) at its far
     end, all on w.clock. keep: how many whole frames it keeps. Keyword arguments
@@ -872,12 +1012,21 @@ class World:
         hang="return",
         clock=None,
         keep=KEEP,
+        busy_ms=0,
+        preempt=None,
+        seed=1,
+        deaf_ms=0,
         **sim,
     ):
-        if port not in PORTS:
-            raise ValueError("port must be one of %s, got %r" % (PORTS, port))
+        if port not in PORTS and port not in LINKS:
+            raise ValueError(
+                "port must be one of %s, got %r" % (PORTS + tuple(sorted(LINKS)), port)
+            )
+        if port in LINKS and LINKS[port][3]:
+            baudrate = LINKS[port][3]  # HID: the controller takes and answers at USB speed
         self.port = port
         self.baudrate = baudrate
+        self._deaf_us = deaf_ms * 1000  # the controller answers nothing before then
         self.call_us = call_us
         self.byte_us = 10000000 // baudrate  # (a byte takes this or 1 us more)
         self.clock = clock or Clock(start, cost_us)  # RealClock(): a live world
@@ -915,8 +1064,11 @@ class World:
         self._sim_active = False  # a group runs: look at the controller every ms
         self._poll_at = 0
         self._looked = False  # w.sim was looked at: it may have been told something
-        cls = _RP2 if port == "rp2" else _ESP32
-        self.uart = cls(self, timeout, timeout_char, txbuf, rxbuf, hang_ms, hang)
+        if port in LINKS:
+            self.uart = _USB(self, port, busy_ms, preempt, seed)
+        else:
+            cls = _RP2 if port == "rp2" else _ESP32
+            self.uart = cls(self, timeout, timeout_char, txbuf, rxbuf, hang_ms, hang)
 
     @property
     def sim(self):
@@ -1218,6 +1370,8 @@ class World:
         self._sim_active = active
 
     def _said(self, t, data):
+        if t < self._deaf_us:
+            return  # just opened: it leaves its first moments unanswered
         for frame in _split(data):
             if self._cuts:
                 frame = frame[: self._cuts.pop(0)]
