@@ -74,7 +74,7 @@ class SimController:
         self.limp = set()
         self.missing = set()
         self._ticks_ms = ticks_ms
-        self._byte_us = baudrate and 10000000 // baudrate  # None: no line
+        self._baud = baudrate  # None: no line
         self._servos = {}  # id: (from, to, start ticks, time_ms)
         self._in = bytearray()  # written by the driver, not yet decoded
         self._out = bytearray()  # for the driver to read
@@ -87,8 +87,11 @@ class SimController:
         self._in = bytearray()
         self._out = bytearray()
         # The line: when (ticks) what was written is in, and when what it says
-        # has gone; [start ticks, bytes, bytes read] of each frame said, not yet read.
+        # has gone, each with the fraction of a ms more (in 1/baudrate ms: a byte is
+        # 10000); [start ticks, bytes, bytes read, fraction] of each frame said, not
+        # yet read.
         self._in_at = self._out_at = self._frame_in = self._ticks_ms()
+        self._in_frac = self._out_frac = self._frame_frac = 0
         self._said = []
 
     def position(self, servo_id):
@@ -124,12 +127,13 @@ class SimController:
 
     def any(self):
         self._tick()
-        if not self._byte_us:
+        if not self._baud:
             return len(self._out)
         n = 0  # the bytes that have come down the line by now
         now = self._ticks_ms()
-        for start, size, read in self._said:
-            come = min(size, time.ticks_diff(now, start) * 1000 // self._byte_us)
+        for start, size, read, frac in self._said:
+            come = time.ticks_diff(now, start)
+            come = size if come > 2 * size + 2 else min(size, (come * self._baud - frac) // 10000)
             if come > 0:
                 n += come - read
             if come < size:
@@ -171,19 +175,24 @@ class SimController:
         off = min(off, len(buf))
         n = min(nbytes, len(buf) - off)
         self._in += buf[off : off + n]
-        if self._byte_us:  # its bytes are in when the line has brought them
+        if self._baud:  # its bytes are in when the line has brought them
             now = self._ticks_ms()
-            start = self._in_at if time.ticks_diff(self._in_at, now) > 0 else now
-            self._in_at = time.ticks_add(start, self._line_ms(n))
+            if time.ticks_diff(self._in_at, now) < 0:  # the line was idle
+                self._in_at, self._in_frac = now, 0
+            self._in_at, self._in_frac = self._line(self._in_at, self._in_frac, n)
         self._tick()
         self._decode()
         return n
 
     # The controller.
 
-    def _line_ms(self, n):
-        # How long n bytes take on the line, in whole ms (rounded up).
-        return (n * self._byte_us + 999) // 1000
+    def _line(self, at, frac, n):
+        # When n bytes sent back to back from at (ticks, and frac 1/baudrate ms more) have
+        # come down the line: (ticks, fraction). The fractions are carried, so that the line
+        # runs at the baud rate exactly however its bytes are written (a byte a write, as
+        # serve() writes them).
+        units = frac + n * 10000
+        return time.ticks_add(at, units // self._baud), units % self._baud
 
     def _send(self, cmd, *params, at=None):
         # Say a frame: at once, or on the line from when `at` (ticks: by default,
@@ -192,12 +201,12 @@ class SimController:
             return
         frame = bytes((0x55, 0x55, len(params) + 2, cmd) + params)
         self._out += frame
-        if self._byte_us:
-            start = self._frame_in if at is None else at
-            if time.ticks_diff(self._out_at, start) > 0:
-                start = self._out_at
-            self._out_at = time.ticks_add(start, self._line_ms(len(frame)))
-            self._said.append([start, len(frame), 0])
+        if self._baud:
+            start, frac = (self._frame_in, self._frame_frac) if at is None else (at, 0)
+            if time.ticks_diff(self._out_at, start) >= 0:  # behind what it said before
+                start, frac = self._out_at, self._out_frac
+            self._said.append([start, len(frame), 0, frac])
+            self._out_at, self._out_frac = self._line(start, frac, len(frame))
 
     def _tick(self):
         # An action group that has run its course completes. A long run's end
@@ -235,10 +244,10 @@ class SimController:
                 break
             i += length + 2
             self._in = d[i:]  # taken before it is done: a frame that raises is gone
-            if self._byte_us:  # it was in before the bytes behind it came
-                self._frame_in = time.ticks_add(
-                    self._in_at, -((len(d) - i) * self._byte_us // 1000)
-                )
+            if self._baud:  # it was in before the bytes behind it came
+                units = self._in_frac - (len(d) - i) * 10000
+                self._frame_in = time.ticks_add(self._in_at, units // self._baud)
+                self._frame_frac = units % self._baud
             self._do(cmd, bytes(d[i - length + 2 : i]))  # its parameters
         self._in = d[i:]
 

@@ -374,28 +374,45 @@ class Line(unittest.TestCase):
         self.sim = SimController(ticks_ms=self.clock)
 
     def test_a_reply_comes_once_the_request_and_its_own_bytes_have_crossed(self):
-        # 4 bytes in by 4.2 ms (5, in the simulator's whole ms), then 6 back by 10.4 ms.
+        # 4 bytes in by 4.17 ms, then 6 back, a byte every 1.042 ms: by 5.21, 6.25, ...
+        # 10.42 ms, each seen at the next whole ms.
         self.sim.write(BATTERY)
         got = []
         for _ in range(13):
             got.append(self.sim.any())
             self.clock.step(1)
-        self.assertEqual(got, [0, 0, 0, 0, 0, 0, 0, 1, 2, 3, 4, 5, 6])
+        self.assertEqual(got, [0, 0, 0, 0, 0, 0, 1, 2, 3, 4, 5, 6, 6])
         self.assertEqual(self.sim.read(), BATTERY_7500)
 
     def test_what_it_says_queues_on_the_line(self):
-        # The RUN is in by 7.3 ms and comes back by 14.6; the battery's request is in by
-        # 11.5 ms, and its reply waits for the line: back by 20.8 (23 in whole ms).
+        # The RUN is in by 7.29 ms and comes back by 14.58 (4 of its bytes by 11.46); the
+        # battery's request is in by 11.46 ms, and its reply waits for the line: back by
+        # 20.83 (5 of its bytes by 19.79).
         self.sim.write(RUN_8 + BATTERY)
         self.clock.step(12)
-        self.assertEqual(self.sim.read(), RUN_8[:3])
-        self.clock.step(4)
-        self.assertEqual(self.sim.read(), RUN_8[3:])
-        self.clock.step(6)
+        self.assertEqual(self.sim.read(), RUN_8[:4])
+        self.clock.step(3)
+        self.assertEqual(self.sim.read(), RUN_8[4:])
+        self.clock.step(5)
         self.assertEqual(self.sim.read(), BATTERY_7500[:5])
         self.clock.step(1)
         self.assertEqual(self.sim.read(), BATTERY_7500[5:])
         self.assertIsNone(self.sim.read())
+
+    def test_the_line_runs_at_9600_baud_however_its_bytes_are_written(self):
+        # 100 bytes a byte a write (as serve() writes what a pty brings), or in one write:
+        # in by 104.17 ms either way, the reply to the last 4 back by 110.42. Each byte's
+        # time was once rounded up to a whole ms (2 ms a byte a write: half the wire's pace).
+        for chunk in (1, 100):
+            clock = Clock()
+            sim = SimController(ticks_ms=clock)
+            data = bytes(96) + BATTERY
+            for at in range(0, 100, chunk):
+                sim.write(data[at : at + chunk])
+            clock.step(110)
+            self.assertEqual(sim.any(), 5, chunk)
+            clock.step(1)
+            self.assertEqual(sim.read(), BATTERY_7500, chunk)
 
     def test_a_request_behind_others_is_in_when_they_are(self):
         self.sim.write(bytes(96))  # 100 ms of bytes that make no frame
