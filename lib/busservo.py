@@ -39,17 +39,21 @@ _QUEUE = const(32)  # frames a blocking query may hold back for poll()
 _HELD = const(96)  # where in _asked they are held (one buffer: RAM, see Memory in docs)
 _HEARD = const(12)  # _waiting[_HEARD]: ticks_ms of the last read that brought bytes
 _BUSY = const(13)  # _waiting[_BUSY]: 1 while decoding (a callback that polls gets None)
+_LINK = const(14)  # _waiting[_LINK]: the link's latency_ms (-1: at any pace, see __init__)
+_READ = const(15)  # _waiting[_READ]: bytes read (modulo 2**30), for what a timeout says
 _TIMEOUT_MS = const(100)  # battery: 10 bytes at 9600 baud take about 10 ms
 _TIMEOUT_PER_ID_MS = const(10)  # 4 more bytes on the wire and one servo to ask
 _TIMEOUT_MAX_MS = const(60000)
 _LATE_MS = const(100)  # how long after its query gave up a reply may still come
 _FORGET_MS = const(1000)  # a query listens first for a reply given up on up to this long ago
-_GAP_MS = const(20)  # a frame's bytes come closer together than this, FIFOs and all
+_GAP_MS = const(20)  # a frame's bytes come closer together than this, FIFOs and all (and
+# the link's latency_ms: a computer's port on USB hands bytes over every few ms)
 _BURST_MS = const(3)  # back to back replies come closer together than this (no FIFO)
 _LINGER_MS = const(10)  # a peer faster than the wire sends a reply right behind another so
 _TICKS = const(0x3FFFFFFF)  # ticks modulo 2**30, as a 32-bit port's wrap
 _HALF = const(0x20000000)  # half of that: a later time, or an earlier one
 _AHEAD_MS = const(40000)  # more ahead than this: ticks came round (rp2's largest txbuf: 34 s)
+_WAIT_MS = const(2)  # a blocking query's look at the link, if it can wait (see _run)
 _SLACK_MS = const(50)  # for a UART's transmit buffer to make room, beyond the wire time
 
 
@@ -106,6 +110,62 @@ def _hold(bus, cmd):
             bus.lost += 1
 
 
+def _run(bus, query):
+    # Run a query (ask()) to its end. A link that can wait in the OS until bytes come (a
+    # computer's port: wait(ms)) waits between its steps, so that a query costs no CPU; a
+    # board's UART cannot, and a board has nothing else to run meanwhile.
+    wait = getattr(bus._uart, "wait", None)
+    for _ in query:
+        if wait:
+            wait(_WAIT_MS)
+
+
+def _size(bus, f, w, look=True):
+    # What rx[f:w] starts with: the size of a frame of the controller's (all of it may not
+    # have come yet), 0 if none starts there, or -1 if too few bytes have come to tell. The
+    # controller sends these, with these Lengths (0: none): RUN 5, STOP 2, COMPLETE 5,
+    # battery 4, positions 3n + 3, in reply to n >= 1 ids (Prm 1) a request in flight asked.
+    rx = bus._rx
+    have = w - f
+    if rx[f] != _HEADER or have > 1 and rx[f + 1] != _HEADER:
+        return 0
+    if have < 4:
+        return -1
+    cmd = rx[f + 3]
+    if cmd == CMD_MULT_SERVO_POS_READ:
+        waiting = bus._waiting
+        if not (waiting[1] or waiting[3]) or rx[f + 2] < 6:
+            return 0
+        if have < 5:
+            return -1
+        n = rx[f + 4]
+        ok = 3 * n + 3 if n and bus._asked[85 + (n >> 3)] >> (n & 7) & 1 else 0
+    elif cmd == CMD_ACTION_GROUP_RUN or cmd == CMD_ACTION_GROUP_COMPLETE:
+        ok = 5
+    elif cmd == CMD_ACTION_GROUP_STOP:
+        ok = 2
+    else:
+        ok = 4 if cmd == CMD_GET_BATTERY_VOLTAGE else 0
+    if not ok or rx[f + 2] != ok:
+        return 0
+    # With look, bytes tell first whether it was cut short: another frame of the
+    # controller's starts where its Length says its own body goes on (then it is none, 0;
+    # -1 while too few bytes tell). 55 55 where a position reply has servo 85 asked is its
+    # id and a position's low byte, not a frame.
+    end = f + ok + 3
+    if end > w:
+        end = w
+    at = rx.find(b"\x55\x55", f + 3, end) if look else -1
+    while at >= 0:
+        n = at - f - 5  # from the first id of a position reply
+        if not (cmd == CMD_MULT_SERVO_POS_READ and n % 3 == 0 and bus._asked[n // 3 + 1] == 85):
+            n = _size(bus, at, w, False)
+            if n:
+                return 0 if n > 0 else -1
+        at = rx.find(b"\x55\x55", at + 1, end)
+    return ok + 2
+
+
 class BusServo:
     def __init__(self, uart, baudrate=9600):
         _check("baudrate", baudrate, 1200, 1000000)
@@ -113,6 +173,15 @@ class BusServo:
             raise TypeError("uart needs any/readinto/write, got %r" % (uart,))
         self._uart = uart
         self._write = uart.write  # one lookup, not two, per command
+        # How the link's bytes come: a board's UART says nothing, and they come as the wire
+        # paces them. A computer's port behind USB says how much later than the wire they may
+        # come (latency_ms: a USB-serial chip hands them over every few ms, a busy computer
+        # later still), or None: at any pace (a pty), when no pause tells anything.
+        link = getattr(uart, "latency_ms", 0)
+        if link is None:
+            link = -1
+        else:
+            _check("uart.latency_ms", link, 0, _TIMEOUT_MAX_MS)
         self._any = uart.any
         # The wire: a byte is 10 bits (8N1), 10000 / baudrate ms. _idle (ticks_ms) and _frac
         # (in 1/baudrate ms, so a byte is 10000 of them: exact) say when what was written
@@ -140,10 +209,10 @@ class BusServo:
         # flight came too soon for it and was taken for a late one (see _apply);
         # then [battery, positions]: the peer's pace, as the last reply that
         # answered a request of that kind (the only one in flight) showed it: 1
-        # sooner than the wire allows, 0 not, 2 none yet. Then _HEARD and _BUSY.
+        # sooner than the wire allows, 0 not, 2 none yet. Then _HEARD, _BUSY, _LINK, _READ.
         # And the ids of the positions asked last, with a bit for each count of
         # ids a positions request in flight asked for; then the queue.
-        self._waiting = [0] * 10 + [2, 2, 0, 0]
+        self._waiting = [0] * 10 + [2, 2, self._idle, 0, link, 0]  # (nothing heard yet: now)
         self._asked = bytearray(_HELD + _QUEUE)  # count, ids; bit n of 85..95: n ids (1..84)
         self.noise = 0  # bytes read that were no frame of the controller's
         self.lost = 0  # frames not held because the queue was full
@@ -368,8 +437,7 @@ class BusServo:
     def read_battery(self, timeout_ms=_TIMEOUT_MS):
         """Battery voltage in mV. Raises OSError(ETIMEDOUT) if no reply comes
         within timeout_ms of the request leaving the wire."""
-        for _ in self.ask(None, timeout_ms):
-            pass
+        _run(self, self.ask(None, timeout_ms))
         return self.battery
 
     def read_positions(self, ids, timeout_ms=None):
@@ -377,8 +445,7 @@ class BusServo:
         near 0 may say -3). Raises OSError(ETIMEDOUT) if no reply comes; the
         default timeout is 100 ms plus 10 ms per servo. Only a reply that
         carries exactly these ids, in this order, answers it."""
-        for _ in self.ask(ids, timeout_ms):
-            pass
+        _run(self, self.ask(ids, timeout_ms))
         got = {}
         for servo_id in ids:
             got[servo_id] = self.positions[servo_id]
@@ -401,6 +468,13 @@ class BusServo:
         if timeout_ms is None:
             timeout_ms = _TIMEOUT_MS + (kind and _TIMEOUT_PER_ID_MS * _count("ids", ids, 84))
         _check("timeout_ms", timeout_ms, 0, _TIMEOUT_MAX_MS)
+        # A link behind USB may hand bytes over up to latency_ms later than the wire brought
+        # them: each wait below is that much longer (none on a link at any pace).
+        lag = waiting[_LINK]
+        if lag < 0:
+            lag = 0
+        timeout_ms += lag
+        gap = _GAP_MS + lag
         while True:  # one query (with again, one after another)
             if self._cut_at:
                 self._finish()  # a request cut short goes first: its reply is waited out
@@ -427,7 +501,7 @@ class BusServo:
                     break
                 if got is None:
                     if not waiting[kind] and (
-                        not given or waited > _GAP_MS and diff(now, waiting[_HEARD]) > _GAP_MS
+                        not given or waited > gap and diff(now, waiting[_HEARD]) > gap
                     ):
                         break
                     yield
@@ -445,6 +519,8 @@ class BusServo:
             else:
                 self.request_battery()
             waiting[kind + 8] = 0  # (another task's request must not clear it: not in _went)
+            read = waiting[_READ]  # what a timeout says: what came meanwhile
+            noise = self.noise
             # Its reply is due within timeout_ms of the request leaving the wire. One whose
             # first bytes came by then is let come whole (for _LATE_MS at most).
             deadline = time.ticks_add(ms(), self.wire_ms() + timeout_ms)
@@ -482,7 +558,14 @@ class BusServo:
                         # which a program busy elsewhere may have read late. Not known now.
                         waiting[kind + 10] = 2
                     if not again:
-                        raise OSError(errno.ETIMEDOUT, "no reply")
+                        read = (waiting[_READ] - read) & _TICKS
+                        raise OSError(
+                            errno.ETIMEDOUT,
+                            "no reply: %d bytes came, %d of them noise"
+                            % (read, self.noise - noise)
+                            if read
+                            else "no reply",
+                        )
                     ok = False
                     break
                 if got is None:
@@ -497,9 +580,11 @@ class BusServo:
             # (the controller answers in turn, both kinds) and this one its first, which the
             # next query may not listen for (two bytes' time tells).
             answered = ms()
-            quiet = ok and _LINGER_MS  # 0: no lingering
-            if quiet and waiting[kind + 10] != 1:
-                quiet = (waiting[2] or waiting[3]) and _BURST_MS
+            quiet = ok and _LINGER_MS + lag  # 0: no lingering
+            if quiet and (
+                waiting[kind + 10] != 1 or (answered - waiting[kind + 6]) & _TICKS > _FORGET_MS
+            ):
+                quiet = (waiting[2] or waiting[3]) and _BURST_MS + lag
             while quiet:
                 got = self._next_frame()
                 _hold(self, got)
@@ -507,7 +592,7 @@ class BusServo:
                 if (
                     got is None
                     and diff(now, waiting[_HEARD]) >= quiet
-                    or diff(now, answered) > _GAP_MS
+                    or diff(now, answered) > gap
                 ):
                     break
                 if got is None:
@@ -545,46 +630,24 @@ class BusServo:
                 return cmd
             rx = self._rx
             budget = _BUDGET
+            whole = -1  # where a frame was let stand whole after a pause (below)
             while True:
                 r = self._r
                 w = self._w
                 # Only the frames the controller sends, with their lengths, are
-                # frames. Anything else is noise: drop a byte and look again, so
-                # that noise cannot swallow the good frames behind it.
+                # frames (_size). Anything else is noise: drop a byte and look
+                # again, so that noise cannot swallow the good frames behind it.
+                # Bytes decide first: a frame inside which another starts was cut
+                # short, and its start was noise (_size looks).
                 while r < w:
-                    have = w - r
-                    ok = rx[r] == _HEADER and (have < 2 or rx[r + 1] == _HEADER)
-                    if ok and have > 3:
-                        length = rx[r + 2]
+                    size = _size(self, r, w, r != whole)
+                    if size > 0 and r + size <= w:
+                        self._r = r + size
                         cmd = rx[r + 3]
-                        # The Length of each frame the controller sends (0: it sends
-                        # none): RUN 5, STOP 2, COMPLETE 5, battery 4, positions 3n + 3.
-                        if cmd == CMD_ACTION_GROUP_RUN or cmd == CMD_ACTION_GROUP_COMPLETE:
-                            ok = 5
-                        elif cmd == CMD_ACTION_GROUP_STOP:
-                            ok = 2
-                        elif cmd == CMD_GET_BATTERY_VOLTAGE:
-                            ok = 4
-                        else:
-                            ok = 3 if cmd == CMD_MULT_SERVO_POS_READ else 0
-                        if ok == 3:
-                            # Positions come only in reply, to n >= 1 ids (Prm 1), with
-                            # Length 3n + 3: a request in flight must have asked for n.
-                            ok = (waiting[1] or waiting[3]) and length > 5
-                            if ok and have > 4:
-                                n = rx[r + 4]
-                                ok = (
-                                    length == 3 * n + 3
-                                    and self._asked[85 + (n >> 3)] >> (n & 7) & 1
-                                )
-                        else:
-                            ok = ok and length == ok
-                        if ok and have >= length + 2:
-                            self._r = r + length + 2
-                            self._apply(cmd, r)
-                            return cmd
-                    if ok:
-                        break  # a frame's start: the rest is on its way
+                        self._apply(cmd, r)
+                        return cmd
+                    if size:
+                        break  # a frame's start: the rest, or what tells, is on its way
                     r += 1
                     self.noise += 1
                 self._r = r
@@ -598,6 +661,7 @@ class BusServo:
                             rx[i] = rx[r + i]
                         self._w = w = w - r
                         self._r = 0
+                        whole -= r
                     chunk = self._chunk
                     n = self._uart.readinto(chunk, n if n < _CHUNK else _CHUNK) or 0
                     for i in range(n):
@@ -607,20 +671,27 @@ class BusServo:
                     self._w = w + n
                     budget -= n
                     waiting[_HEARD] = time.ticks_ms()
+                    waiting[_READ] = (waiting[_READ] + n) & _TICKS
                 elif r < w:
                     # A frame's start, and nothing more has come. Once the line
                     # has been quiet for longer than its missing bytes take (a
-                    # UART's FIFO may hold them back) and _GAP_MS more, the frame
-                    # was cut short: its start was noise.
+                    # UART's FIFO may hold them back), the link's latency and
+                    # _GAP_MS more, the frame was cut short: its start was noise.
+                    # (A whole frame whose last bytes might start another, with
+                    # nothing behind them, is taken as it is.) On a link at any
+                    # pace no pause tells: the bytes behind it will.
+                    link = waiting[_LINK]
                     have = w - r
                     missing = rx[r + 2] + 2 - have if have > 2 else _FRAME_MAX
                     quiet = time.ticks_diff(time.ticks_ms(), waiting[_HEARD])
-                    if quiet < _GAP_MS + missing * 10000 // self._baud:
+                    if link < 0 or quiet < _GAP_MS + link + missing * 10000 // self._baud:
                         return None
                     if budget > 0 and self._any():
                         continue  # it came while this was away (a GC, a callback): read it
-                    self._r = r + 1
-                    self.noise += 1
+                    if missing > 0:
+                        self._r = r + 1
+                        self.noise += 1
+                    whole = r
                 else:
                     return None
         finally:

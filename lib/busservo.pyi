@@ -102,7 +102,15 @@ class BusServo:
         baud), so the driver knows when what it wrote will have left the wire. It does not
         set the UART's rate. Raises ValueError or TypeError for a bad baudrate, and
         TypeError for a uart without any(), readinto() and write() (a path, say:
-        boards/unix.py's uart(path) opens one on the unix port)."""
+        boards/unix.py's uart(path) opens one on the unix port).
+
+        Two attributes of uart, both optional, say how its bytes come (a computer's ports
+        have them; a board's UART has neither): latency_ms, how much later than the wire a
+        byte may reach the program (an int in 0..60000: a USB-serial chip's hand-overs and a
+        busy computer's delay; None: at any pace, a pty), which the driver's timing counts;
+        and wait(ms), which waits in the OS until bytes come or ms pass, and which a blocking
+        query calls between its looks at the UART, so that it costs no CPU. Raises
+        ValueError or TypeError naming uart.latency_ms for any other latency_ms."""
     # Commands. Each checks all its arguments before it writes anything.
     def move(self, servo_id: int, position: int, time_ms: int) -> None:
         """CMD_SERVO_MOVE: move one servo to position within time_ms.
@@ -161,7 +169,9 @@ class BusServo:
     # Queries.
     def read_battery(self, timeout_ms: int = 100) -> int:
         """Battery voltage in mV. Raises OSError(ETIMEDOUT) if no reply comes within
-        timeout_ms (0..60000) of the request leaving the wire.
+        timeout_ms (0..60000) of the request leaving the wire (and uart.latency_ms more).
+        Its words say what came meanwhile: "no reply" when nothing did, "no reply: 6 bytes
+        came, 6 of them noise" when bytes did (another baud rate, another program).
 
         Replies to earlier requests of its kind (request_battery(), a query that timed out)
         come first, as events: it lets them come, for as long as it would wait for its own

@@ -50,14 +50,15 @@ MPY="$MPY test_record"
 # The CPython pass: the same modules run on a computer (lib/busservo_cpython.py gives CPython
 # what it lacks, tests/cpython.py the tests), labelled "(CPython)": the driver's, the
 # simulator's, the wire world's, asyncio's, the motion's, the arm's, the calibration's, the
-# teleop's, the recorder's and the panel's, and test_host (the serial port through pyserial on
+# teleop's, the recorder's, the panel's and the links' (a computer's USB: test_links), and
+# test_host (the serial port through pyserial on
 # a pty, the busservo command, pip install .) and test_hid (a USB HID controller through a
 # fake hidapi binding, and the real binding with nothing plugged in), which run on CPython
 # only (CPY_ONLY). test_wire and test_soak look at the world's own heap and its
 # MicroPython-style asyncio: not on CPython.
 CPY="test_frames test_commands test_queries test_sim test_reliability test_async test_motion"
 CPY="$CPY test_arm test_calibrate test_teleop test_web test_host test_hid test_adversarial"
-CPY="$CPY test_record test_web_lifecycle"
+CPY="$CPY test_record test_web_lifecycle test_links"
 CPY_ONLY="test_host test_hid"
 # The longest modules start first, so that the short ones fill the other cores meanwhile and
 # the run ends soon after its longest module does (in the order of their times, measured).
