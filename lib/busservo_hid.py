@@ -10,7 +10,11 @@
 # hid_port() gives the UART methods the driver uses, as busservo_host.serial_port() does:
 # any() and readinto() never wait (they read the reports that have come, without
 # blocking, as a byte stream), and write() gathers bytes until a whole frame, by its
-# Length byte, and sends it as one report. What goes wrong is an OSError that says it in
+# Length byte, and sends it as one report; wait(ms) waits for a report in the OS, and
+# latency_ms says how late a report may come (a poll of the endpoint, a busy computer). A
+# controller just switched on or plugged in may leave its first second unanswered: hid_port()
+# asks it for its battery until it answers (up to WAKE_MS), so that the first query of a
+# program is answered. What goes wrong is an OSError that says it in
 # words: the binding not installed, no controller plugged in (ENOENT), no permission on
 # Linux (EACCES: a udev rule), unplugged mid-command (ENODEV), a frame too long for a
 # report (EMSGSIZE).
@@ -40,8 +44,10 @@
 import errno
 import os
 import sys
+import time
 
 import busservo_cpython
+from busservo_host import BUSY_MS
 
 VID = 0x0483  # STMicroelectronics' vendor id, which these controllers use
 PID = 0x5750
@@ -50,6 +56,14 @@ _HEADER = 0x55
 _READ = 256  # bytes asked for a report read: a longer report is not cut short
 _HOLD = 4096  # bytes read ahead of the driver at most; the OS queues the reports behind them
 _REPORTS = 64  # reports read a call at most, so that a flood of them cannot hold it
+# How much later than it was sent a report may reach a program, ms: a poll of the endpoint
+# (up to 10 ms) and what a busy computer adds.
+LATENCY_MS = 10 + BUSY_MS
+# A controller just opened is asked for its battery up to this long, every _ASK_MS, until it
+# answers (the public xArm library retries its first battery read for 5 s).
+WAKE_MS = 3000
+_ASK_MS = 250
+_GET_BATTERY = b"\x55\x55\x02\x0f"
 
 # On Linux: the rule that lets a user open the controller's hidraw device (root's alone
 # otherwise), in /etc/udev/rules.d/70-busservo.rules.
@@ -133,10 +147,11 @@ def _open_error(hid, port, path, e):
     return OSError(errno.EIO, "could not open %s: %s (%s)" % (port, e, why))
 
 
-def hid_port(port="hid"):
+def hid_port(port="hid", wake_ms=WAKE_MS):
     """The HID controller at port, "hid" for the first one plugged in or "hid:<path>" (as
-    ports() lists them), open for busservo.BusServo(). Raises OSError saying why it
-    cannot be opened."""
+    ports() lists them), open for busservo.BusServo(), and awake: it is asked for its battery
+    until it answers, for up to wake_ms (0: not asked; one that never answers is open all the
+    same, and its first query says so). Raises OSError saying why it cannot be opened."""
     if not isinstance(port, str) or not (port == "hid" or port.startswith("hid:")):
         raise ValueError(
             "port must be 'hid' or 'hid:<path>' (busservo_hid.ports() lists them), got %r"
@@ -162,7 +177,9 @@ def hid_port(port="hid"):
     except (OSError, ValueError) as e:  # hidapi says only "open failed"
         raise _open_error(hid, port, path, e)
     device.set_nonblocking(1)
-    return HidUART(device, port)
+    uart = HidUART(device, port)
+    uart.wake(wake_ms)
+    return uart
 
 
 class HidUART(busservo_cpython.UART):
@@ -176,6 +193,7 @@ class HidUART(busservo_cpython.UART):
         self._rest = 0  # bytes of a frame longer than its report, due in the next reports
         self._out = bytearray()  # bytes written that make no whole frame yet
         self._lost = None  # why the device is gone, once it is
+        self.latency_ms = LATENCY_MS  # read by busservo.BusServo() when it is made
 
     def _gone(self, e):
         self._lost = e
@@ -212,6 +230,49 @@ class HidUART(busservo_cpython.UART):
             if not report:
                 return
             self._take(bytes(report))
+
+    def wait(self, ms):
+        """Wait until a report has come, or ms have passed, in the OS (hidapi's read with a
+        timeout): what a blocking query does between its looks (busservo's _run)."""
+        device = self._open()
+        if self._in:
+            return
+        try:
+            report = device.read(_READ, ms)
+        except (OSError, ValueError) as e:
+            raise self._gone(e)
+        if report:
+            self._take(bytes(report))
+
+    def wake(self, ms=WAKE_MS):
+        """Ask the controller for its battery every _ASK_MS until it answers, for up to ms:
+        True once it has. Its answers are not read (what else comes is)."""
+        end = time.monotonic() + ms / 1000
+        ask = 0
+        while time.monotonic() < end:
+            if time.monotonic() >= ask:
+                self.write(_GET_BATTERY)
+                ask = time.monotonic() + _ASK_MS / 1000
+            self.wait(10)
+            if self._battery_taken():
+                self.wait(20)  # the answer to an earlier ask may be right behind it
+                self._battery_taken()
+                return True
+        return False
+
+    def _battery_taken(self):
+        # Take the battery replies out of what has come, frame by frame: True if one was.
+        data = self._in
+        taken = False
+        at = 0
+        while len(data) - at > 3 and data[at] == data[at + 1] == _HEADER:
+            end = at + data[at + 2] + 2
+            if data[at + 3] == _GET_BATTERY[3] and end <= len(data):
+                del data[at:end]
+                taken = True
+            else:
+                at = end
+        return taken
 
     def _take(self, report):
         n = len(report)

@@ -9,7 +9,10 @@
 #
 # serial_port() opens the port at 9600 8N1 and gives the UART methods the driver uses, as
 # MicroPython's ports have them: any(), readinto() and write() never wait (write() takes
-# what the OS has room for, and says how much). What goes wrong is an OSError that says it
+# what the OS has room for, and says how much). It also says how its bytes come, for the
+# driver's timing (latency_ms: a USB-serial chip hands them over every few ms, a busy
+# computer later still; None on a pty, at any pace), and waits in the OS for them (wait(ms)),
+# so that a query costs no CPU while it waits. What goes wrong is an OSError that says it
 # in words: no such port (ENOENT), in use by another program (EBUSY), no permission
 # (EACCES), a file or a folder, not a serial port (ENOTTY), gone, unplugged mid-command
 # (ENODEV).
@@ -17,12 +20,23 @@
 # The `busservo` command (main(), below) is this module too: `busservo --help` says it.
 import errno
 import os
+import re
+import select
 import sys
 import time
 
 import busservo_cpython
 
 BAUDRATE = 9600
+# What a busy computer may add to each of a USB link's hand-overs, ms: a port's latency_ms
+# counts it.
+BUSY_MS = 20
+# How often a USB-serial chip hands the bytes it took off the wire over to the computer, by
+# its USB vendor id: an FTDI when its latency timer runs out (16 ms by default; on Linux
+# /sys/bus/usb-serial/devices/ttyUSB0/latency_timer says it), a CH340 or CH9102 every few ms.
+# An unknown chip counts as an FTDI.
+_HAND_OVER_MS = {0x0403: 16, 0x1A86: 4}
+_UNKNOWN_CHIP_MS = 16
 
 
 def _serial():
@@ -77,9 +91,12 @@ def _open_error(path, e):
 class SerialUART(busservo_cpython.UART):
     """A pyserial port with machine.UART's any/read/readinto/write, as the driver uses them."""
 
-    def __init__(self, port, path):
+    def __init__(self, port, path, latency_ms=None):
         self._port = port
         self.path = path
+        # How much later than the wire its bytes may come, ms (None: at any pace): read by
+        # busservo.BusServo() when it is made (latency_ms(), below).
+        self.latency_ms = latency_ms
         # POSIX: the port's file is non-blocking (pyserial opens it so): a write takes what
         # fits and says how much, as a board's UART does. pyserial's own write() would wait.
         self._fd = port.fileno() if hasattr(os, "O_NONBLOCK") else None
@@ -119,6 +136,14 @@ class SerialUART(busservo_cpython.UART):
                 raise self._gone(e)
             raise OSError(errno.EBADF, "the port %s is closed" % self.path)
 
+    def wait(self, ms):
+        """Wait until bytes have come, or ms have passed, in the OS: what a blocking query
+        does between its looks at the port (busservo's _run), so that it costs no CPU."""
+        if self._fd is None:  # Windows: no select() on a serial port
+            time.sleep(ms / 1000)
+        else:
+            select.select([self._fd], [], [], ms / 1000)
+
     def flush(self):
         self._port.flush()
 
@@ -153,7 +178,34 @@ def serial_port(path, baudrate=BAUDRATE):
         )
     except (serial.SerialException, OSError, ValueError) as e:
         raise _open_error(path, e)
-    return SerialUART(port, path)
+    return SerialUART(port, path, latency_ms(path))
+
+
+def latency_ms(path):
+    """How much later than the wire the controller's bytes may reach a program reading the
+    serial port at path, in ms, as busservo's driver counts it (a port's latency_ms): a
+    USB-serial chip's hand-over period (an FTDI's latency timer, as Linux says it; else by the
+    chip's USB vendor id) and BUSY_MS for a busy computer; BUSY_MS for a port with no USB
+    (the bytes come as the wire paces them); None for a pty, whose far end writes at any
+    pace."""
+    real = os.path.realpath(path)
+    if real.startswith("/dev/pts/") or re.match(r"/dev/ttys\d", real):  # Linux, macOS
+        return None
+    name = os.path.basename(real)
+    try:
+        with open("/sys/bus/usb-serial/devices/%s/latency_timer" % name) as f:
+            return int(f.read()) + BUSY_MS
+    except (OSError, ValueError):
+        pass  # not Linux, or not a chip with a latency timer: by its vendor id
+    try:
+        from serial.tools import list_ports
+
+        found = [p for p in list_ports.comports() if p.device in (path, real)]
+    except Exception:  # listing the ports is a nicety here: never a reason to fail
+        found = []
+    if not found or found[0].vid is None:
+        return BUSY_MS if found else _UNKNOWN_CHIP_MS + BUSY_MS
+    return _HAND_OVER_MS.get(found[0].vid, _UNKNOWN_CHIP_MS) + BUSY_MS
 
 
 # USB-serial chips seen on these controllers' boards, first in ports()'s list.
@@ -388,7 +440,25 @@ def _bus(run, port=None, servos=_SIM_SERVOS):
     return busservo.BusServo(uart), False
 
 
-def _checklist(run, out):
+def _checklist(run, out, e):
+    # What a query that timed out says: the bytes that came, if any (the driver's words in
+    # e: "no reply: N bytes came, M of them noise"), else the wiring's checklist.
+    if e.strerror != "no reply":
+        came, noise = [int(word) for word in e.strerror.split() if word.isdigit()]
+        print(
+            "no answer from the controller on %s within %d ms, though %d bytes came, %s"
+            % (
+                run.port,
+                run.waited,
+                came,
+                "%d of them no frame: the controller at another baud rate than %d, or "
+                "another program on the port" % (noise, BAUDRATE)
+                if noise
+                else "frames that answer nothing asked (another program asking it?)",
+            ),
+            file=out,
+        )
+        return
     print(
         "no answer from the controller on %s within %d ms. Check:" % (run.port, run.waited),
         file=out,
@@ -438,7 +508,7 @@ def _check(run, words, options):
     except OSError as e:
         if e.errno != errno.ETIMEDOUT:
             raise
-        _checklist(run, sys.stderr if run.json else sys.stdout)
+        _checklist(run, sys.stderr if run.json else sys.stdout, e)
         return 1
     took = (time.monotonic() - start) * 1000
     run.result({"battery_mv": mv, "round_trip_ms": round(took, 1), "noise": bus.noise})
@@ -1073,7 +1143,7 @@ def main(argv=None):
     except OSError as e:
         if e.errno == errno.ETIMEDOUT and run and run.port:
             print("busservo: ", end="", file=sys.stderr)
-            _checklist(run, sys.stderr)
+            _checklist(run, sys.stderr, e)
             return 1
         if e.strerror and len(e.args) > 1:
             why = e.strerror

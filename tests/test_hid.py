@@ -7,6 +7,7 @@
 import asyncio
 import errno
 import sys
+import time
 import unittest
 
 import busservo
@@ -59,9 +60,13 @@ class Controller:
         self.denied = False  # opening it fails, as hidapi fails without permission
         self.said = bytearray()  # what the sim said that makes no whole frame yet
         self.script = None  # or a function: a frame received -> the reports it answers with
+        self.deaf_s = 0  # it answers nothing for this long after it is opened
+        self.opened = 0  # (time.monotonic())
 
     def receive(self, data):
         self.got.append(data)
+        if time.monotonic() < self.opened + self.deaf_s:
+            return  # just switched on: what it is sent is not answered
         frame = data[1 : 1 + data[3] + 2]  # the report id, then the frame
         if self.script is not None:
             self.reports += self.script(frame)
@@ -93,6 +98,7 @@ class Device:
         self.nonblocking = 0
         self.closed = False
         self.reads = 0
+        self.waits = 0  # reads that may wait (a timeout given): busservo_hid's wait() alone
 
     def open_path(self, path):
         if not isinstance(path, bytes):
@@ -101,18 +107,24 @@ class Device:
         if c is None or c.denied:
             raise OSError("open failed")
         self.controller = c
+        c.opened = time.monotonic()
 
     def set_nonblocking(self, v):
         self.nonblocking = v
         return 0
 
     def read(self, max_length, timeout_ms=0):
-        assert self.nonblocking and timeout_ms == 0, "a read that may wait"
+        # Non-blocking: at once, or with a timeout for up to that (hid_read_timeout()). What
+        # a controller says comes at once, so a read that finds nothing sleeps it all.
+        assert self.nonblocking, "a read that may wait for ever"
         c = self._open()
         if not c.plugged:
             raise OSError("read error")
         self.reads += 1
         c.answer()
+        if not c.reports and timeout_ms > 0:
+            self.waits += 1
+            time.sleep(timeout_ms / 1000)
         return list(c.reports.pop(0)[:max_length]) if c.reports else []
 
     def write(self, buff):
@@ -193,8 +205,8 @@ class WithBinding(unittest.TestCase):
             sys.modules[name] = binding  # None: "import hid" raises ImportError
         return binding
 
-    def port(self, port="hid"):
-        uart = busservo_hid.hid_port(port)
+    def port(self, port="hid", wake_ms=busservo_hid.WAKE_MS):
+        uart = busservo_hid.hid_port(port, wake_ms)
         self.uarts.append(uart)
         return uart
 
@@ -294,7 +306,7 @@ class Reports(WithBinding):
         super().setUp()
         self.xarm = Controller()
         self.binding = self.install(Binding(self.xarm))
-        self.uart = self.port()
+        self.uart = self.port(wake_ms=0)  # the reports alone: nothing answers them here
 
     def test_a_frame_is_one_report_behind_report_id_0_padded_to_64_bytes(self):
         self.assertEqual(self.uart.write(GET_BATTERY), 4)
@@ -365,6 +377,7 @@ class Reports(WithBinding):
     def test_any_and_readinto_never_wait(self):
         device = self.binding.devices[0]
         self.assertEqual(device.nonblocking, 1)  # and Device.read() checks each read
+        self.addCleanup(lambda: self.assertEqual(device.waits, 0))
         self.assertEqual(self.uart.any(), 0)
         buf = bytearray(16)
         self.assertIsNone(self.uart.readinto(buf))  # nothing came: None, as a UART says
@@ -417,6 +430,9 @@ class Driver(WithBinding):
         self.xarm = Controller(sim=self.sim)
         self.install(Binding(self.xarm))
         self.bus = busservo.BusServo(self.port())
+        # hid_port() asked for the battery until the controller answered: once, here.
+        self.assertEqual(self.xarm.frames_got(), [GET_BATTERY])
+        self.xarm.got.clear()
 
     def test_read_battery(self):
         self.assertEqual(self.bus.read_battery(), 7500)
@@ -515,6 +531,46 @@ class Driver(WithBinding):
         self.assertEqual(self.bus.poll(), CMD_ACTION_GROUP_RUN)
         self.assertEqual(self.bus.poll(), CMD_ACTION_GROUP_COMPLETE)
         self.assertEqual((self.bus.group, self.bus.times, self.bus.running), (1, 1, False))
+
+
+class JustSwitchedOn(WithBinding):
+    """A controller that leaves its first second unanswered, as one just switched on or
+    plugged in may (the public xArm library retries its battery read for 5 s)."""
+
+    def setUp(self):
+        super().setUp()
+        self.xarm = Controller(sim=busservo_sim.SimController(baudrate=None))
+        self.xarm.deaf_s = 1.0
+        self.install(Binding(self.xarm))
+
+    def test_hid_port_asks_until_it_answers_and_the_first_read_is_answered(self):
+        # docs/computer.md's snippet: a read right after hid_port(). It raised TimeoutError.
+        start = time.monotonic()
+        bus = busservo.BusServo(self.port())
+        woke = time.monotonic() - start
+        self.assertEqual(bus.read_battery(), 7500)
+        self.assertTrue(1.0 <= woke < 2.0, woke)
+        asks = self.xarm.frames_got()
+        self.assertEqual(set(asks), {GET_BATTERY})
+        self.assertTrue(4 <= len(asks) <= 8, len(asks))  # every 250 ms, then the read's
+        self.assertIsNone(bus.poll())  # its answers to the asks are not events
+        self.assertEqual((bus.noise, bus.early), (0, 1))
+
+    def test_without_asking_the_first_read_finds_it_silent(self):
+        bus = busservo.BusServo(self.port(wake_ms=0))
+        with self.assertRaises(OSError):
+            bus.read_battery()
+        self.assertEqual(self.xarm.frames_got(), [GET_BATTERY])
+
+    def test_one_that_never_answers_is_opened_all_the_same(self):
+        # Asked for wake_ms, then open: its first query says it does not answer.
+        self.xarm.deaf_s = 3600
+        start = time.monotonic()
+        uart = self.port(wake_ms=600)
+        self.assertTrue(0.6 <= time.monotonic() - start < 1.5)
+        self.assertFalse(uart.wake(0))
+        with self.assertRaises(OSError):
+            busservo.BusServo(uart).read_battery()
 
 
 class Package(unittest.TestCase):

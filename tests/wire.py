@@ -866,7 +866,8 @@ LINKS = {
     "hid": (1, 64, True, 1000000),
 }
 # What a computer may add to each hand-over when it is busy: the computer's ports say their
-# latency_ms as their hand-overs' period and this (busservo_host.BUSY_MS says the same).
+# latency_ms as their hand-overs' period and this (busservo_host.BUSY_MS: tests/test_host.py
+# checks that they agree).
 BUSY_MS = 20
 
 
