@@ -11,6 +11,10 @@
 # A 3.3 V adapter's RX wants a divider if the controller's TX measures about 5 V
 # (boards/README.md).
 #
+# It says how its bytes come, for the driver's timing (latency_ms: a USB-serial adapter
+# hands them over every few ms, a busy computer later still; None for a pty, at any pace),
+# and a blocking query waits for them in the OS (wait(ms)), costing no CPU meanwhile.
+#
 # An unplugged adapter raises OSError(EIO) from the next call. But a process
 # that leads a session with no terminal (a systemd service, setsid) takes the
 # device as its terminal (MicroPython's open() has no O_NOCTTY), and an unplug
@@ -26,11 +30,44 @@ _BAUDRATES = {
 }
 _VTIME = 5  # indices into termios' control characters (Linux)
 _VMIN = 6
+# What a computer adds to a serial port's bytes, ms, as busservo_host.latency_ms() says it
+# (tests/test_host.py checks that they agree): an FTDI adapter's latency timer (16 ms by
+# default, or what Linux says), one unknown as long, and what a busy computer adds to each
+# hand-over (busservo_host.BUSY_MS).
+_HAND_OVER_MS = 16
+_BUSY_MS = 20
 
 
 def uart(path, baudrate=9600):
     """Open the serial device at path, raw, at baudrate."""
     return SerialUART(path, baudrate)
+
+
+def _mount_type(fd):
+    # The type of the file system an open file is on, by its mount's id (Linux /proc): a pty
+    # is on devpts. The unix port has no readlink() to follow a link to one.
+    try:
+        with open("/proc/self/fdinfo/%d" % fd) as f:
+            mount = [line.split()[1] for line in f if line.startswith("mnt_id:")][0]
+        with open("/proc/self/mountinfo") as f:
+            for line in f:
+                if line.split()[0] == mount:
+                    return line.split(" - ")[1].split()[0]
+    except (OSError, IndexError):
+        pass
+    return None
+
+
+def latency_ms(path, fd):
+    """How much later than the wire the controller's bytes may reach this program, in ms,
+    as busservo's driver counts it: None for a pty, whose far end writes at any pace."""
+    if _mount_type(fd) == "devpts":
+        return None
+    try:
+        with open("/sys/bus/usb-serial/devices/%s/latency_timer" % path.split("/")[-1]) as f:
+            return int(f.read()) + _BUSY_MS
+    except (OSError, ValueError):
+        return _HAND_OVER_MS + _BUSY_MS
 
 
 class SerialUART:
@@ -63,6 +100,7 @@ class SerialUART:
             if attrs is None:  # termios refused it: no tty
                 raise OSError(e.args[0], "%s is not a serial device" % path)
             raise OSError(e.args[0], "%s: cannot set %d baud" % (path, baudrate))
+        self.latency_ms = latency_ms(path, self._file.fileno())  # read by busservo.BusServo()
         self._in = select.poll()
         self._in.register(self._file, select.POLLIN)
         self._out = select.poll()
@@ -113,6 +151,12 @@ class SerialUART:
             buf[i] = self._buf[start + i]
         self._start = start + n
         return n
+
+    def wait(self, ms):
+        """Wait until bytes have come, or ms have passed, in the OS: what a blocking query
+        does between its looks at the device."""
+        if self._start == self._end:
+            self._in.poll(ms)
 
     def read(self, nbytes=None):
         n = self.any()

@@ -4,6 +4,7 @@
 # do the rest: the simulated controller behind one (sh boards/unix.sh --sim-pty),
 # and one that nobody reads (a CPython one-liner: the unix port opens no pty).
 import errno
+import io
 import os
 import time
 import unittest
@@ -91,12 +92,14 @@ class Select:
 class Poll:
     def __init__(self, select):
         self.select = select
+        self.timeouts = []  # of each poll(), in ms
 
     def register(self, obj, mask):
         self.obj = obj
         self.mask = mask
 
     def poll(self, timeout):
+        self.timeouts.append(timeout)
         s = self.select
         event = s.POLLHUP if s.hung_up else 0
         if s.readable:
@@ -121,7 +124,16 @@ class StandIns(unittest.TestCase):
         self.select = Select()
         self.file = File()
         self.unix = load_unix(self.termios, self.select)
-        self.unix.open = lambda path, mode: self.file  # found before the builtin
+        self.sysfs = {}  # path: what it reads (the rest of the system's files: none)
+
+        def opened(path, mode="r"):  # found before the builtin
+            if path == "/dev/ttyUSB0":
+                return self.file
+            if path in self.sysfs:
+                return io.StringIO(self.sysfs[path])
+            raise OSError(errno.ENOENT, path)
+
+        self.unix.open = opened
 
     def assertHangUp(self, call, *args):
         try:
@@ -205,6 +217,28 @@ class StandIns(unittest.TestCase):
         self.select.writable = False
         self.assertIsNone(uart.write(BATTERY))
         self.assertEqual(self.file.writes, [])
+
+    def test_how_late_its_bytes_may_come(self):
+        # A USB-serial adapter: its FTDI's latency timer where Linux says it, else as long
+        # as an FTDI's default (16 ms), and what a busy computer adds (20 ms).
+        self.assertEqual(self.unix.uart("/dev/ttyUSB0").latency_ms, 16 + 20)
+        self.sysfs["/sys/bus/usb-serial/devices/ttyUSB0/latency_timer"] = "1\n"
+        self.assertEqual(self.unix.uart("/dev/ttyUSB0").latency_ms, 1 + 20)
+
+    def test_wait_waits_in_the_os_until_bytes_come(self):
+        # What a blocking query does between its looks: poll() for up to ms, or nothing when
+        # bytes wait already.
+        uart = self.unix.uart("/dev/ttyUSB0")
+        reads = uart._in
+        reads.timeouts.clear()
+        uart.wait(2)
+        self.assertEqual(reads.timeouts, [2])
+        self.select.readable = True
+        self.file.data = BATTERY_7500
+        self.assertEqual(uart.any(), 6)
+        reads.timeouts.clear()
+        uart.wait(2)
+        self.assertEqual(reads.timeouts, [])
 
     def test_readinto_clamps_to_the_buffer(self):
         uart = self.unix.uart("/dev/ttyUSB0")
@@ -290,6 +324,16 @@ class SimPty(unittest.TestCase):
         self.uart.close()
         stop(self.pid)
         os.system("rm -f %s %s.log" % (self.link, self.link))
+
+    def test_a_pty_is_at_any_pace_and_a_query_waits_for_it(self):
+        # Through a link to it, as --link makes: its far end writes when its program runs,
+        # so no pause tells the driver anything (latency_ms None).
+        import busservo
+
+        self.assertIsNone(self.uart.latency_ms)
+        bus = busservo.BusServo(self.uart)
+        self.assertEqual(bus.read_battery(1000), 7500)
+        self.assertEqual(bus.read_positions([1, 2, 3, 4, 5, 6], 1000)[6], 500)
 
     def test_a_hang_up_raises_eio_from_every_call_at_once(self):
         uart = self.uart
