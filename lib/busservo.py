@@ -545,8 +545,10 @@ class BusServo:
                             # and none came after it, from a peer not known to be as slow as
                             # the wire: it was this one (and the late ones were lost, as the
                             # controller answers in turn). It is no event: taken back from
-                            # poll()'s, if it is the last held.
+                            # poll()'s, if it is the last held. If they were not lost after
+                            # all, they come behind: the queries of the next second linger.
                             waiting[kind] = waiting[kind + 2] = 0
+                            waiting[kind + 6] = waiting[kind + 4]
                             waiting[kind + 10] = 1
                             self.early += 1
                             got = self._queued - 1
@@ -581,10 +583,9 @@ class BusServo:
             # next query may not listen for (two bytes' time tells).
             answered = ms()
             quiet = ok and _LINGER_MS + lag  # 0: no lingering
-            if quiet and (
-                waiting[kind + 10] != 1 or (answered - waiting[kind + 6]) & _TICKS > _FORGET_MS
-            ):
-                quiet = (waiting[2] or waiting[3]) and _BURST_MS + lag
+            recent = (answered - waiting[kind + 6]) & _TICKS <= _FORGET_MS
+            if quiet and (waiting[kind + 10] != 1 or not recent):
+                quiet = (recent or waiting[2] or waiting[3]) and _BURST_MS + lag
             while quiet:
                 got = self._next_frame()
                 _hold(self, got)
