@@ -34,7 +34,7 @@ if busservo_board.simulated:
 
 leader = busservo_board.robot(bus, busservo_board.joints())
 try:
-    follower = bm.Robot.load(bus, FOLLOWER)
+    follower = bm.Robot.load(bus, FOLLOWER, DPS)  # DPS holds over the file's
     print("the follower: the calibration in %s" % FOLLOWER)
 except OSError as e:
     if e.args[0] != errno.ENOENT:

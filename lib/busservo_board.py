@@ -15,6 +15,8 @@
 # (robot.json, in the folder the program runs from: a board's root), so that every example
 # moves your arm within the limits you found; without that file, a Robot of the joints the
 # example gives: joints() are the examples' arm (a base, a shoulder, an elbow and a claw).
+# A speed the example asks for (joints(dps=30)) holds with the file too: a calibration
+# brings limits, never a faster arm.
 import errno
 
 import busservo
@@ -50,17 +52,20 @@ def bus():
 
 def robot(bus, joints):
     """The Robot saved to busservo_motion.CALIBRATION, or with no such file, a Robot of
-    joints on bus."""
+    joints on bus. A speed cap the joints ask for holds over the file's: each of its joints
+    turns at most the least dps of joints (and its own, if the file gives one)."""
     import busservo_motion
 
     path = busservo_motion.CALIBRATION
+    dps = busservo_motion.least_dps(joints)
     try:
-        arm = busservo_motion.Robot.load(bus, path)
+        arm = busservo_motion.Robot.load(bus, path, dps)
     except OSError as e:
         if e.args[0] != errno.ENOENT:
             raise
         return busservo_motion.Robot(bus, joints)  # no calibration saved: the example's
-    print("using the calibration in %s: joints %s" % (path, ", ".join(arm.names)))
+    said = ", at most %g degrees/s" % dps if dps else ""
+    print("using the calibration in %s: joints %s%s" % (path, ", ".join(arm.names), said))
     return arm
 
 

@@ -217,12 +217,14 @@ class Calibration:
         ValueError naming each joint that cannot be calibrated and why."""
         return bm.Robot(self.bus if bus is None else bus, self.joints())
 
-    def save(self, path=None, links=None):
+    def save(self, path=None, links=None, dps=None):
         """Write the calibration to path (default busservo_motion.CALIBRATION, robot.json)
         as Robot.load() reads it, with links {name: mm} if given (measured with a ruler, for
-        busservo_arm, which checks them), keeping what else the file holds (links saved
-        before). Refuses as robot() does, before the file is touched. Returns the Robot."""
-        robot = self.robot()
+        busservo_arm, which checks them), keeping what else the file holds: links saved
+        before, and a joint's dps a person set in it. Refuses as robot() does, before the
+        file is touched. Returns the Robot, each joint at most dps degrees a second if given
+        (a program's cap, as Robot.load() keeps it: not saved)."""
+        joints = self.joints()
         more = {}
         if links is not None:
             from busservo_arm import check_links  # only with links: the arm is their owner
@@ -230,5 +232,15 @@ class Calibration:
             more["links"] = check_links(links)
         if path is None:
             path = bm.CALIBRATION
-        robot.save(path, **more)  # what else the file holds (the links measured before) kept
-        return robot
+        try:
+            before = bm.Robot.load(None, path).joints
+        except (OSError, ValueError, TypeError):
+            before = {}  # no file yet, or not one of ours
+        for name, joint in joints.items():
+            kept = before.get(name)
+            if kept and kept.dps:  # a calibration brings limits, never a faster joint
+                settings = joint.config()
+                settings["dps"] = kept.dps
+                joints[name] = bm.Joint(**settings)
+        bm.Robot(self.bus, joints).save(path, **more)  # the file's links kept
+        return bm.Robot.load(self.bus, path, dps)

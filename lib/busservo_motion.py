@@ -102,10 +102,21 @@ def number(name, value, low=_NINF, high=_INF):
     return value
 
 
+def least_dps(joints):
+    """The least dps of joints {name: Joint}, or None when none has one: the speed cap a
+    program's joints ask for, which Robot.load(bus, path, dps) keeps over a file's."""
+    least = None
+    for joint in joints.values():
+        if joint.dps and (least is None or joint.dps < least):
+            least = joint.dps
+    return least
+
+
 def _dps(dps):
     number("dps", dps, 0)
     if not dps:
         raise ValueError("dps must be more than 0 degrees/s, got %r" % (dps,))
+    return dps
 
 
 def _ms(name, value):
@@ -267,17 +278,24 @@ class Robot:
     # Calibration.
 
     @staticmethod
-    def load(bus, path):
-        """A Robot on bus with the joints that save() wrote to path."""
+    def load(bus, path, dps=None):
+        """A Robot on bus with the joints that save() wrote to path. dps: a cap in degrees a
+        second that holds whatever the file says: each joint turns at most the least of its
+        own dps (the file's) and dps."""
         joints = {}
         saved = load_json(path, "joints", "Robot.save()")
         if _type(saved) is not dict:
             raise ValueError("%s: joints must be {name: settings}, got %r" % (path, saved))
         for name, settings in saved.items():
             try:
-                joints[name] = Joint(**settings)
+                joint = Joint(**settings)
             except TypeError as e:
                 raise TypeError("%s: joint %r: %s" % (path, name, e))
+            if dps is not None and (joint.dps is None or _dps(dps) < joint.dps):
+                settings = joint.config()
+                settings["dps"] = dps
+                joint = Joint(**settings)
+            joints[name] = joint
         return Robot(bus, joints)
 
     def save(self, path, **more):

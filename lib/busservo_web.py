@@ -397,6 +397,7 @@ class Panel:
         self.path = path or bm.CALIBRATION
         self.page = page or PAGE
         self.bus = robot.bus
+        self.dps = bm.least_dps(robot.joints)  # the speed cap a calibration saved here keeps
         self.robots = 0  # robots the panel has had (a calibration saved gives it another)
         self.limp = False  # joints let go by a limp or a STOP, until the next move
         self.armed = None  # the token of the page that armed, or None

@@ -167,7 +167,7 @@ class Calibrate:
         if links is not None:
             panel.load("busservo_arm")  # it checks them: loaded for that, then let go
         try:
-            robot = self.cal.save(panel.path, links)
+            robot = self.cal.save(panel.path, links, panel.dps)  # the panel's cap kept
         except (TypeError, ValueError) as e:
             raise web.Refused(400, str(e))
         except OSError as e:  # the board's filesystem

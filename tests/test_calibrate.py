@@ -398,6 +398,28 @@ class File(unittest.TestCase):
         self.assertEqual((again["links"], again["note"]), (links, "the blue arm"))
         self.assertEqual(sorted(again["joints"]), sorted(IDS))
 
+    def test_calibrating_again_keeps_a_dps_a_person_set_and_a_programs_cap(self):
+        # A person slowed the base in the file (its "dps": 20); the joints calibrated
+        # again keep it (broken until issue 41: saved as null, the base as fast as asked).
+        # A program's cap (the panel's 30 degrees/s) holds over the robot save() returns,
+        # and is not written: the file is the arm's, the cap the program's.
+        calibrate(self.w, self.cal)
+        self.cal.save(self.path)
+        saved = json.loads(self.read())
+        self.assertEqual({saved["joints"][name]["dps"] for name in IDS}, {None})
+        saved["joints"]["base"]["dps"] = 20
+        with open(self.path, "w") as f:
+            json.dump(saved, f)
+        cal = bc.Calibration(self.bus, IDS)
+        calibrate(self.w, cal)
+        robot = cal.save(self.path, dps=30)
+        again = json.loads(self.read())["joints"]
+        for name in IDS:
+            self.assertEqual(again[name]["dps"], 20 if name == "base" else None, name)
+            self.assertEqual(robot.joints[name].dps, 20 if name == "base" else 30, name)
+        self.assertEqual(cal.save(self.path).joints["shoulder"].dps, None)
+        self.assertEqual(cal.save(self.path, dps=10).joints["base"].dps, 10)
+
     def test_the_default_path_is_the_calibration_every_example_loads(self):
         calibrate(self.w, self.cal)
         default = bm.CALIBRATION

@@ -209,6 +209,29 @@ class Calibration(Tidy):
             again.joints["shoulder"].position(-45), arm(bus).joints["shoulder"].position(-45)
         )
 
+    def test_a_cap_given_to_load_holds_over_the_files_dps(self):
+        # Robot.load(bus, path, dps): each joint at the least of the file's dps and the
+        # cap (a calibration saves "dps": null: without the cap, as fast as asked);
+        # least_dps() of a program's joints is the cap they ask for.
+        w, bus = world()
+        path = scratch("motion") + ".json"
+        joints = arm(bus).joints
+        joints["claw"] = bm.Joint(6, kind=bm.PWM_180, limits=(0, 60), dps=20)
+        try:
+            bm.Robot(bus, joints).save(path)
+            for cap, want in ((None, None), (30, 30), (10, 10), (22.5, 22.5)):
+                loaded = bm.Robot.load(bus, path, cap)
+                self.assertEqual(loaded.joints["base"].dps, want, cap)
+                self.assertEqual(loaded.joints["claw"].dps, min(20, cap or 20), cap)
+                self.assertEqual(loaded.joints["claw"].limits, (0, 60))
+            for bad, words in ((0, ("dps", "more than 0")), ("30", ("dps", "'30'"))):
+                raises(lambda bad=bad: bm.Robot.load(bus, path, bad), *words)
+        finally:
+            os.remove(path)
+        self.assertEqual(bm.least_dps(joints), 20)
+        self.assertEqual(bm.least_dps({"a": bm.Joint(1, dps=40), "b": bm.Joint(2)}), 40)
+        self.assertEqual(bm.least_dps({"a": bm.Joint(1)}), None)
+
     def test_save_writes_the_joints_and_keeps_what_else_the_file_holds(self):
         # An arm's links beside the joints (busservo_arm) are kept; more keys are added; a
         # file that is not a calibration is written afresh.

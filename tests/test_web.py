@@ -1821,6 +1821,58 @@ class Calibrating(Tidy):
 
         on_arm(scenario)
 
+    def test_a_calibration_saved_on_the_page_keeps_the_panels_speed_cap(self):
+        # examples/web_panel.py's panel drives joints of at most 30 degrees a second. A
+        # calibration saved on its page gave the panel the file's joints, each "dps": null:
+        # the next slider went as fast as asked (broken until issue 41). Each frame that
+        # moves base after the save, within 30 degrees/s: 125 positions a second.
+        def capped(world):
+            joints = {}
+            for name, joint in arm_robot(world).joints.items():
+                settings = joint.config()
+                settings["dps"] = 30
+                joints[name] = bm.Joint(**settings)
+            return bm.Robot(robot_bus(world), joints)
+
+        async def scenario(port, world, robot, path):
+            with open(path) as f:
+                saved = json.load(f)
+            for joint in saved["joints"].values():
+                joint["dps"] = None  # as a calibration saves it: the cap is the program's
+            with open(path, "w") as f:
+                json.dump(saved, f)
+            token = await armed(port)
+            status, reply = await calibrate(port, world, token)
+            self.assertEqual(status, 200, reply)
+            status, reply = await http(port, "POST", "/api/calibrate", {"step": "save"}, token)
+            self.assertEqual((status, reply["cal"]["step"]), (200, "saved"), reply)
+            with open(path) as f:
+                self.assertEqual(json.load(f)["joints"]["base"]["dps"], None)  # the arm's
+            status, reply = await http(
+                port, "POST", "/api/calibrate", {"step": "home", "confirm": True}, token
+            )
+            self.assertEqual(status, 200, reply)
+            self.assertTrue(await until(lambda: world.sim.position(1) == 512, 3000))
+            before = len(moves(world))
+            status, reply = await http(
+                port, "POST", "/api/target", {"targets": {"base": 80}}, token
+            )
+            self.assertEqual(status, 200, reply)
+            await polled(port, token, 600)
+            at = 512
+            sent = 0
+            for frame in moves(world)[before:]:
+                ms = frame[5] | frame[6] << 8
+                for i in range(7, len(frame) - 1, 3):
+                    if frame[i] == 1:
+                        position = frame[i + 1] | frame[i + 2] << 8
+                        self.assertTrue(abs(position - at) <= ms * 125 // 1000 + 1, frame)
+                        at = position
+                        sent += 1
+            self.assertTrue(sent, "no frame moved base")
+
+        on_arm(scenario, robot_of=capped)
+
     def test_links_the_arm_would_refuse_are_refused_and_nothing_is_saved(self):
         # One check of the links: an upper_arm or a forearm of 0 cannot make an arm, so the
         # page does not save them (once, an upper_arm of 0 was saved, and Arm.load() failed).
