@@ -262,6 +262,43 @@ class WhatALinkSays(unittest.TestCase):
         raised(bus.read_positions, [1], 100)
         self.assertTrue((self.clock.now_us - start) // 1000 < 150)
 
+    def query(self, bus, uart, *replies):
+        """read_battery()'s answer (or its OSError), the peer sending battery replies of
+        (mV, ms after the request was written) once it was."""
+        query = bus.ask(None)
+        writes = uart.writes
+        try:
+            while uart.writes == writes:  # (first it listens for a reply given up on)
+                next(query)
+                self.clock.sleep_ms(1)
+            for mv, ms in replies:
+                uart.feed_later(b"\x55\x55\x04\x0f" + bytes((mv & 0xFF, mv >> 8)), ms)
+            for _ in query:
+                self.clock.sleep_ms(1)
+        except OSError as e:
+            return e.errno
+        return bus.battery
+
+    def test_after_trouble_a_fast_peers_answer_right_behind_a_late_reply_is_taken(self):
+        # A pty's peer answers at once (sooner than the wire: a peer faster than it). One
+        # query missed (its reply late), the next answered: then the late reply comes right
+        # after a request, and that request's own reply a few ms behind it (a busy computer).
+        # Within a second of the trouble the answer lingers 10 ms (_LINGER_MS), so the later
+        # reply is the answer: lingering 3 ms (_BURST_MS, as for a peer of the wire's pace),
+        # the answer was the late reply's (2, a wrong answer).
+        for behind in (4, 6, 9):
+            uart = FakeUART()
+            uart.latency_ms = None
+            bus = busservo.BusServo(uart)
+            got = [
+                self.query(bus, uart, (1, 1)),
+                self.query(bus, uart),  # its reply (2) is late
+                self.query(bus, uart, (3, 1)),
+                self.query(bus, uart, (2, 1), (4, 1 + behind)),
+                self.query(bus, uart, (5, 1)),
+            ]
+            self.assertEqual(got, [1, errno.ETIMEDOUT, 3, 4, 5], behind)
+
     def test_latency_ms_must_be_a_number_of_ms(self):
         for bad, error in (("16", TypeError), (-1, ValueError), (16.0, TypeError)):
             uart = FakeUART()
