@@ -830,10 +830,9 @@ def _record(run, words, options):
     recorder = busservo_record.Recorder(robot, path=path, timeout_ms=run.timeout)
     start = time.monotonic()
     try:
-        with _ended_as_ctrl_c():
-            while seconds is None or time.monotonic() - start < seconds:
-                recorder.step()  # never waits for the wire
-                time.sleep(0.001)
+        while seconds is None or time.monotonic() - start < seconds:
+            recorder.step()  # never waits for the wire
+            time.sleep(0.001)
     except KeyboardInterrupt:
         pass  # the normal end of a recording
     recording = recorder.stop()
@@ -846,15 +845,20 @@ def _record(run, words, options):
 
 class _ended_as_ctrl_c:
     """Within it, SIGTERM and SIGHUP (the terminal closed) end the command as Ctrl-C does:
-    a KeyboardInterrupt, so that a recording is saved and the servos are stopped."""
+    a KeyboardInterrupt, so that what it started is stopped (a move held where it is, a
+    group stopped, a recording saved, the panel's servos halted). Once: a second one while
+    it stops them is let pass (SIGKILL ends it at once)."""
 
     def __enter__(self):
         import signal
 
         self.before = {}
+        came = []
 
         def interrupt(signum, frame):
-            raise KeyboardInterrupt
+            if not came:
+                came.append(signum)
+                raise KeyboardInterrupt
 
         for name in ("SIGTERM", "SIGHUP"):  # (Windows has no SIGHUP)
             number = getattr(signal, name, None)
@@ -1059,23 +1063,22 @@ def _teleop(run, words, options):
     then = time.monotonic()
     reads = 0
     try:
-        with _ended_as_ctrl_c():
-            while not teleop.done:
-                teleop.step()  # never waits for the wire
-                now = time.monotonic()
-                if now - then >= _RATE_S:
-                    print(
-                        "%.1f cycles a second, %s"
-                        % (
-                            (teleop.reads - reads) / (now - then),
-                            "following"
-                            if teleop.engaged
-                            else "going to the leader's pose at %d degrees/s" % _PLAY_DPS,
-                        ),
-                        flush=True,
-                    )
-                    then, reads = now, teleop.reads
-                time.sleep(0.0005)
+        while not teleop.done:
+            teleop.step()  # never waits for the wire
+            now = time.monotonic()
+            if now - then >= _RATE_S:
+                print(
+                    "%.1f cycles a second, %s"
+                    % (
+                        (teleop.reads - reads) / (now - then),
+                        "following"
+                        if teleop.engaged
+                        else "going to the leader's pose at %d degrees/s" % _PLAY_DPS,
+                    ),
+                    flush=True,
+                )
+                then, reads = now, teleop.reads
+            time.sleep(0.0005)
     except KeyboardInterrupt:
         teleop.stop()
         at = _halt(follower, run)
@@ -1133,7 +1136,8 @@ def main(argv=None):
                     "%s wants a PORT (busservo ports lists them; --sim: simulated)" % command
                 )
             run.port = words.pop(0)
-        return _COMMANDS[command](run, words, options)
+        with _ended_as_ctrl_c():  # every command ends on SIGTERM and SIGHUP as on Ctrl-C
+            return _COMMANDS[command](run, words, options)
     except _Usage as e:
         print("busservo: %s (busservo --help)" % e, file=sys.stderr)
         return 2

@@ -352,40 +352,44 @@ class OnAPty(Scratch):
         self.assertIn("is gone (unplugged?)", err)
         self.assertNotIn("Traceback", err)
 
-    def test_ctrl_c_stops_a_move_where_the_servo_is(self):
+    def test_ctrl_c_sigterm_and_sighup_stop_a_move_where_the_servo_is(self):
         # As the panel's STOP does: where it is, read, is where it goes (not on to 900).
-        move = command_process("move", self.link, 1, 900, 20000, CHECKED)
-        try:
-            self.assertIn("this moves it to 900", move.stdout.readline())
-            time.sleep(0.5)
-            move.send_signal(signal.SIGINT)
-            out, err = move.communicate(timeout=10)
-        finally:
-            move.kill()
-            move.wait()
-        self.assertEqual(move.returncode, 130, out + err)
-        self.assertIn("stopped: servo 1 holds at", out)
-        time.sleep(0.3)  # the stop's own 100 ms
-        status, first, _ = busservo_command("positions", self.link, 1)
-        time.sleep(0.5)  # 10 positions more on the way to 900, had it gone on
-        self.assertEqual(busservo_command("positions", self.link, 1), (0, first, ""))
-        self.assertLess(int(first.split()[1]), 900)
-        self.assertIn("holds at %s" % first.split()[1], out)
+        # SIGTERM and SIGHUP (the terminal closed) as Ctrl-C: before issue 41 they ended
+        # the command with no stop (exit -15, -1), and the servo went on to 900.
+        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+            move = command_process("move", self.link, 1, 900, 20000, CHECKED)
+            try:
+                self.assertIn("this moves it to 900", move.stdout.readline())
+                time.sleep(0.5)
+                move.send_signal(sig)
+                out, err = move.communicate(timeout=10)
+            finally:
+                move.kill()
+                move.wait()
+            self.assertEqual(move.returncode, 130, (sig, out + err))
+            self.assertIn("stopped: servo 1 holds at", out)
+            time.sleep(0.3)  # the stop's own 100 ms
+            status, first, _ = busservo_command("positions", self.link, 1)
+            time.sleep(0.5)  # 10 positions more on the way to 900, had it gone on
+            self.assertEqual(busservo_command("positions", self.link, 1), (0, first, ""), sig)
+            self.assertLess(int(first.split()[1]), 900)
+            self.assertIn("holds at %s" % first.split()[1], out)
 
     def test_ctrl_c_stops_an_action_group_and_stop_stops_one_left_running(self):
-        group = command_process("group", self.link, 2, 0, CHECKED)  # until stopped
-        try:
-            self.assertIn("action group 2 runs until stopped", group.stdout.readline())
-            group.send_signal(signal.SIGINT)
-            out, err = group.communicate(timeout=10)
-        finally:
-            group.kill()
-            group.wait()
-        self.assertEqual(group.returncode, 130, out + err)
-        self.assertIn("stopped action group 2", out)
-        self.assertEqual(
-            busservo_command("stop", self.link), (0, "no action group was running\n", "")
-        )
+        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):  # each as Ctrl-C
+            group = command_process("group", self.link, 2, 0, CHECKED)  # until stopped
+            try:
+                self.assertIn("action group 2 runs until stopped", group.stdout.readline())
+                group.send_signal(sig)
+                out, err = group.communicate(timeout=10)
+            finally:
+                group.kill()
+                group.wait()
+            self.assertEqual(group.returncode, 130, (sig, out + err))
+            self.assertIn("stopped action group 2", out)
+            self.assertEqual(
+                busservo_command("stop", self.link), (0, "no action group was running\n", "")
+            )
         # A group left running (its command killed): stop stops it.
         group = command_process("group", self.link, 2, 0, CHECKED)
         try:
@@ -470,23 +474,49 @@ class OnAPty(Scratch):
             (0, "1: 500\n4: 500\n", ""),
         )
 
-    def test_ctrl_c_stops_a_recording_playing_where_the_servo_is(self):
+    def test_ctrl_c_sigterm_and_sighup_stop_a_recording_playing_where_the_servo_is(self):
         # The base turns 0..90 degrees over 10 s (500..875): stopped 1.5 s in, it holds there.
         path = os.path.join(self.scratch, "slow.jsonl")
         write_recording(path, seconds=10, degrees=90)
-        play = command_process("play", self.link, path, CHECKED, cwd=self.scratch)
-        said = read_until(play, "playing (Ctrl-C stops it)")
-        time.sleep(1.5)
-        status, out, err = ctrl_c(play)
-        self.assertEqual(status, 130, said + out + err)
-        self.assertIn("stopped at sample ", out)
-        time.sleep(0.3)  # the stop's own 100 ms
-        _, first, _ = busservo_command("positions", self.link, 1)
-        time.sleep(0.5)  # 20 positions more on the way, had it gone on
-        self.assertEqual(busservo_command("positions", self.link, 1), (0, first, ""))
-        at = int(first.split()[1])
-        self.assertTrue(500 < at < 875, first)
-        self.assertIn("the servos hold at {1: %d" % at, out)
+        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+            play = command_process("play", self.link, path, CHECKED, cwd=self.scratch)
+            said = read_until(play, "playing (Ctrl-C stops it)")
+            time.sleep(1.5)
+            status, out, err = ctrl_c(play, sig)
+            self.assertEqual(status, 130, (sig, said + out + err))
+            self.assertIn("stopped at sample ", out)
+            time.sleep(0.3)  # the stop's own 100 ms
+            _, first, _ = busservo_command("positions", self.link, 1)
+            time.sleep(0.5)  # 20 positions more on the way, had it gone on
+            self.assertEqual(busservo_command("positions", self.link, 1), (0, first, ""), sig)
+            at = int(first.split()[1])
+            self.assertTrue(500 < at < 875, first)
+            self.assertIn("the servos hold at {1: %d" % at, out)
+
+    def test_sigterm_and_sighup_end_every_command_as_ctrl_c_does(self):
+        # Those that run until stopped, each ended by the signal: what Ctrl-C says, the same
+        # exit status (record: 0, its normal end), no traceback. Before issue 41 scan and the
+        # panel died of them (exit -15, -1), as move, group and play did (above).
+        for command, started, stopped, status in (
+            (("scan", self.link), "", "", 130),  # 254 ids at 9600 baud: 2 s
+            (
+                ("panel", "--sim", "--password", "a password!", "--port", free_tcp()),
+                "(Ctrl-C stops the panel)",
+                "",
+                130,
+            ),
+            (("record", "--sim", "hand.rec"), "Ctrl-C ends it", "saved hand.rec", 0),
+            (("teleop", "--sim"), "Ctrl-C stops it", "", 130),
+        ):
+            for sig in (signal.SIGTERM, signal.SIGHUP):
+                process = command_process(*command, cwd=self.scratch)
+                said = read_until(process, started)
+                self.assertIn(started, said, command)
+                time.sleep(0.3)
+                code, out, err = ctrl_c(process, sig)
+                self.assertEqual(code, status, (command, sig, said + out + err))
+                self.assertIn(stopped, out, command)
+                self.assertNotIn("Traceback", err, command)
 
 
 class ScriptedPeers(WithPeers):
@@ -1340,10 +1370,19 @@ def read_until(process, text, seconds=20):
     return said
 
 
-def ctrl_c(process):
-    """Ctrl-C, then (status, stdout, stderr) once it has ended."""
+def free_tcp():
+    """A TCP port no one listens on now, as a str."""
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return str(s.getsockname()[1])
+
+
+def ctrl_c(process, sig=signal.SIGINT):
+    """Ctrl-C (or the signal sig), then (status, stdout, stderr) once it has ended."""
     try:
-        process.send_signal(signal.SIGINT)
+        process.send_signal(sig)
         out, err = process.communicate(timeout=20)
     finally:
         process.kill()
