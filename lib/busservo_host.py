@@ -648,7 +648,12 @@ def _group(run, words, options):
         return 1
     bus.run_group(group, times)
     try:
-        cmd = _wait_for_group(bus, group, time.monotonic() + run.ms() / 1000)
+        until = time.monotonic() + run.ms() / 1000
+        cmd = _wait_for_group(bus, group, until)
+        if cmd == busservo.CMD_ACTION_GROUP_STOP:
+            # A group ran: the controller stops it for this one (STOP), then starts this (RUN).
+            print("(the action group that ran is stopped for it)")
+            cmd = _wait_for_group(bus, group, until)
         if cmd != busservo.CMD_ACTION_GROUP_RUN:
             print(
                 "action group %d did not start: has the controller one of that number? "

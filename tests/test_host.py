@@ -400,6 +400,27 @@ class OnAPty(Scratch):
         status, out, err = busservo_command("stop", self.link)
         self.assertEqual((status, out), (0, "stopped the action group that ran\n"), err)
 
+    def test_a_group_started_while_another_runs_runs(self):
+        # The controller stops the group that runs (STOP), then starts the one asked (RUN):
+        # the command took the STOP for its own group's and said it did not start (exit 1,
+        # while it ran: until issue 41).
+        group = command_process("group", self.link, 2, 0, CHECKED)  # until stopped
+        try:
+            self.assertIn("runs until stopped", group.stdout.readline())
+        finally:
+            group.kill()  # left running
+            group.wait()
+        status, out, err = busservo_command("group", self.link, 1, 1, CHECKED)  # 500 ms
+        self.assertEqual(status, 0, out + err)
+        self.assertEqual(
+            out,
+            "(the action group that ran is stopped for it)\n"
+            "action group 1 runs once (Ctrl-C stops it)\naction group 1 done\n",
+        )
+        self.assertEqual(
+            busservo_command("stop", self.link), (0, "no action group was running\n", "")
+        )
+
     def test_a_group_runs_once_told_and_says_when_it_is_done(self):
         status, out, err = busservo_command("group", self.link, 1)
         self.assertEqual(status, 1, out + err)
