@@ -65,6 +65,71 @@ def header_package(example):
     return None
 
 
+# What a module may import that its packages need not ship: (module, import) -> why.
+OPTIONAL = {
+    ("*", "busservo_cpython"): "CPython's stand-ins, imported where MicroPython's fail",
+    ("busservo_board", "busservo_sim"): "bus() without a board.py: its ImportError says "
+    "to install the simulator",
+    ("busservo_board", "busservo_motion"): "robot() and joints(), the motion layer's: each "
+    "package with an example that calls them ships it",
+}
+
+
+def imported(module):
+    """The busservo modules module (lib/module.py) imports, at its top or in a function,
+    and those a panel's part loads by name (panel.load("...")): a sorted list."""
+    names = set()
+    with open("lib/%s.py" % module) as f:
+        for line in f:
+            words = line.split()
+            if len(words) > 1 and words[0] in ("import", "from"):
+                if words[1].startswith("busservo"):
+                    names.add(words[1].rstrip(","))
+            at = line.find('.load("busservo')
+            if at >= 0:
+                names.add(line[at + 7 :].split('"')[0])
+    names.discard(module)
+    return sorted(names)
+
+
+class Imports(unittest.TestCase):
+    def test_a_package_ships_what_its_code_imports(self):
+        # Once, lib/busservo_calibrate.json shipped the calibration without busservo_arm,
+        # which its save() imports for an arm's links: a board's calibrate.py, with a person
+        # typing the links in, ended in ImportError, nothing saved (issue 41).
+        for path in PACKAGES:
+            shipped = [name[:-4] for name, _ in read_package(path)["urls"] if ".mpy" in name]
+            for module in shipped:
+                for name in imported(module):
+                    optional = ("*", name) in OPTIONAL or (module, name) in OPTIONAL
+                    self.assertTrue(
+                        name in shipped or optional,
+                        "%s: %s imports %s, which it does not ship" % (path, module, name),
+                    )
+
+    def test_each_package_alone_imports_what_it_ships(self):
+        # Each package installed alone into an empty folder, as a board's /lib: each module
+        # it ships imports on the unix port with nothing else on its path.
+        url, server, log = serve_checkout(self)
+        targets = []
+        try:
+            commands = []
+            for path in PACKAGES:
+                target = scratch("package")
+                targets.append(target)
+                ok, out = mip_install(url, path, target)
+                self.assertTrue(ok, out)
+                modules = [name[:-4] for name in os.listdir(target) if name.endswith(".mpy")]
+                use = ";".join("import " + name for name in modules) + ";print('imported')"
+                run = "MICROPYPATH=.frozen:%s %s -c \"%s\"" % (target, MICROPYTHON, use)
+                commands.append(run)
+            for path, (ok, out) in zip(PACKAGES, sh_all(commands)):
+                self.assertTrue(ok and "imported" in out, "%s: %s" % (path, out))
+        finally:
+            stop(server)
+            sh("rm -rf %s %s" % (log, " ".join(targets)))
+
+
 class Mip(unittest.TestCase):
     def test_mip_installs_the_driver_from_package_json(self):
         url, server, log = serve_checkout(self)
