@@ -121,7 +121,7 @@ class Imports(unittest.TestCase):
                 self.assertTrue(ok, out)
                 modules = [name[:-4] for name in os.listdir(target) if name.endswith(".mpy")]
                 use = ";".join("import " + name for name in modules) + ";print('imported')"
-                run = "MICROPYPATH=.frozen:%s %s -c \"%s\"" % (target, MICROPYTHON, use)
+                run = 'MICROPYPATH=.frozen:%s %s -c "%s"' % (target, MICROPYTHON, use)
                 commands.append(run)
             for path, (ok, out) in zip(PACKAGES, sh_all(commands)):
                 self.assertTrue(ok and "imported" in out, "%s: %s" % (path, out))
