@@ -271,6 +271,7 @@ class Robot:
         self._ms = 0  # the move time of the last frame step() sent
         self._slowing = False  # that frame slowed a joint to its dps (or glides longer than asked)
         self._owed = [0] * n  # a slowed joint's way not yet taken, in 1/1000 positions
+        self._way = [0] * n  # the way a slowed joint's servo had to go for the last frame (1/1000)
         self.frame_ms = 0  # a stream frame's time on the wire, in ms (0: none sent yet)
         self._frame_n = 0  # the joints in the frame it was measured on
         self.updates = 0  # stream frames sent
@@ -611,13 +612,13 @@ class Robot:
         glide = ms
         fresh = False
         live_i = self._live_i
+        way = self._way
         for k in range(n):
             i = live_i[k]
-            position = goal[i]
             pps = joints[i]._pps
             if pps:  # no faster than the joint's dps: step towards the goal
                 if elapsed < 0:
-                    elapsed = time.ticks_diff(now, self._sent)
+                    elapsed = sent = time.ticks_diff(now, self._sent)
                     cap = self._ms + since
                     if cap > 10 * since:
                         cap = 10 * since
@@ -625,21 +626,12 @@ class Robot:
                         cap = ms
                     if elapsed > cap:
                         elapsed = cap
-                owed[i] += pps * elapsed
-                most = owed[i] // 1000
-                if position > at[i] + most:
-                    position = at[i] + most
-                    fresh = True
-                elif position < at[i] - most:
-                    position = at[i] - most
-                    fresh = True
-                else:
-                    most = owed[i] = 0  # there: nothing owed
-                owed[i] -= most * 1000
-                need = (abs(position - at[i]) * 1000 + pps - 1) // pps  # ms at its dps
+                need = toward(live[k], goal[i], i, at, owed, way, pps, elapsed, self._ms, sent)
                 if need > glide:
                     glide = need
-            live[k][1] = position
+                fresh = fresh or live[k][1] != goal[i]
+            else:
+                live[k][1] = goal[i]
         bus.move_many(live, glide)
         self._sent = now
         self._ms = glide
@@ -668,6 +660,34 @@ class Robot:
                 self._in[i] = 0
             self._live.clear()
             self._live_i.clear()
+
+
+def toward(pair, goal, i, at, owed, way, pps, elapsed, last_ms, since):
+    """One step of joint i of a stream towards goal, at pps positions a second at most
+    (Robot.step(), busservo_teleop): pair[1] = the position to send, from at[i] (the last
+    sent) as far as elapsed ms allow (owed[i] carries a position's part, in 1/1000ths).
+    Returns the ms the move needs at pps from where the servo is: short of at[i] still if
+    the last move (way[i]/1000 positions, over last_ms, sent `since` ms ago) is on its way. So a
+    servo that goes straight from where it is to each target, over each move's time, never
+    turns faster than pps, however soon a move comes after a long one. way[i] becomes this
+    move's (the caller sets at[i] once it is sent). Allocates nothing."""
+    position = goal
+    a = at[i]
+    owed[i] += pps * elapsed
+    most = owed[i] // 1000
+    if position > a + most:
+        position = a + most
+    elif position < a - most:
+        position = a - most
+    else:
+        most = owed[i] = 0  # there: nothing owed
+    owed[i] -= most * 1000
+    pair[1] = position
+    far = abs(position - a) * 1000  # in 1/1000 positions
+    if since < last_ms:  # the servo is short of at[i] by the last move's way still to go
+        far += way[i] * (last_ms - since) // last_ms
+    way[i] = far
+    return (far + pps - 1) // pps
 
 
 def _time(degrees, dps):

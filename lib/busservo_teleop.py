@@ -28,7 +28,7 @@
 # joints' own dps always hold. The teleop is the follower's player: estop() stops it.
 import time
 
-from busservo_motion import Robot, aio, number
+from busservo_motion import Robot, aio, number, toward
 
 try:
     from micropython import const
@@ -126,6 +126,7 @@ class Teleop:
         self._goal = [0] * n  # the follower's targets from the last leader reply
         self._at = [0] * n  # the follower's positions: read at the start, then as sent
         self._owed = [0] * n  # a slowed joint's way not yet taken, in 1/1000 positions
+        self._way = [0] * n  # the way a slowed joint's servo had to go for the last move (1/1000)
         self._pairs = [[servo_id, 0] for servo_id in self._fids]  # the move, made once
         self._ask = None  # the query in flight (a BusServo.ask() generator, again=True)
         self._lead = None  # the leader's, made once
@@ -136,6 +137,7 @@ class Teleop:
         now = time.ticks_ms()
         self.read_at = now  # ticks_ms of the last good leader reply
         self._sent = now  # ticks_ms of the last move
+        self._ms = 0  # its time
         self.period_ms = 0  # between the last two leader replies: the rate is 1000 / this
         self._cycle = 40  # ms: the last period that was no pause, each move's time
         self.engaged = False  # the follower follows (else it is on its way, at dps)
@@ -292,7 +294,7 @@ class Teleop:
         if not self._fresh or self.follower.bus.wire_ms() > self._room:
             return False
         now = time.ticks_ms()
-        elapsed = time.ticks_diff(now, self._sent)
+        elapsed = since = time.ticks_diff(now, self._sent)
         glide = self._cycle
         if glide < _GLIDE_MIN:
             glide = _GLIDE_MIN
@@ -303,6 +305,7 @@ class Teleop:
         goal = self._goal
         at = self._at
         owed = self._owed
+        way = self._way
         pairs = self._pairs
         if not self.engaged:  # within ENGAGE degrees already (after a short pause, say)?
             for k in range(len(goal)):
@@ -315,30 +318,22 @@ class Teleop:
         slowed = False
         ms = glide
         for k in range(len(goal)):
-            position = goal[k]
             pps = self._jpps[k] if engaged else self._pps[k]
             if pps:  # no faster than pps: step towards the goal
-                owed[k] += pps * elapsed
-                most = owed[k] // 1000
-                if position > at[k] + most:
-                    position = at[k] + most
-                    slowed = True
-                elif position < at[k] - most:
-                    position = at[k] - most
-                    slowed = True
-                else:
-                    most = owed[k] = 0
-                owed[k] -= most * 1000
-                need = (abs(position - at[k]) * 1000 + pps - 1) // pps
+                need = toward(pairs[k], goal[k], k, at, owed, way, pps, elapsed, self._ms, since)
                 if need > ms:
                     ms = need
-            if not engaged and abs(position - goal[k]) > self._tol[k]:
+                slowed = slowed or pairs[k][1] != goal[k]
+            else:
+                pairs[k][1] = goal[k]
+                way[k] = abs(goal[k] - at[k]) * 1000  # (were it slowed next)
+            if not engaged and abs(pairs[k][1] - goal[k]) > self._tol[k]:
                 near = False
-            pairs[k][1] = position
         self.follower.bus.move_many(pairs, ms)
         for k in range(len(at)):
             at[k] = pairs[k][1]
         self._sent = now
+        self._ms = ms
         self._fresh = False
         self.moves += 1
         self.slowed += slowed

@@ -101,7 +101,8 @@ MODULES = {
         "test_reliability",
         "test_adversarial",
     ],
-    "busservo_motion": ["test_motion", "test_arm"],  # the arm's lines stream through it
+    # the arm's lines stream through it, and the teleop steps with its toward()
+    "busservo_motion": ["test_motion", "test_arm", "test_teleop"],
     "busservo_web": ["test_web", "test_web_lifecycle"],
     "busservo_web_sliders": ["test_web"],
     "busservo_web_teach": ["test_web"],
@@ -966,6 +967,12 @@ MUTANTS = {
             "            if dps is not None and (joint.dps is None or _dps(dps) < joint.dps):",
             "            if dps is not None:",
             "a joint a person slowed in the file goes at the program's faster cap",
+        ),
+        (
+            "toward-forgets-the-servos-way",
+            "    if since < last_ms:  # the servo is short of at[i] by the last move's way still",
+            "    if False:  # the servo is short of at[i] by the last move's way still",
+            "after a leader reply late by a flash write, the follower's servos outrun their dps",
         ),
     ],
     # The panel's core (issue 30: HTTP, sessions, arming, the dead-man, STOP, the state, the

@@ -271,6 +271,57 @@ class Safety(Tidy):
         self.assertTrue(120 <= speed <= 130, speed)  # 125 positions a second
         self.assertEqual(seen[-1][1], 700)
 
+    def test_no_servo_faster_than_dps_after_a_late_reply(self):
+        # The leader 96 degrees away (400 positions), dps=30 (125 positions a second), one
+        # leader reply in 12 late by 15 or 50 ms (a flash write on a board). The simulated
+        # controller's servos go straight from where they are to each target over each
+        # move's time: each move, as it arrives, within 125 positions a second of where its
+        # servo is (and a position for the rounding). Before issue 41, a move after a late
+        # reply was timed to the long cycle and taken as reached: the next, a cycle later,
+        # went on from its target while the servo was 4-6 positions short of it (225
+        # positions a second within a move). Then the same through a follower joint's own
+        # dps, following a leader moved by hand at up to 500 positions a second.
+        for port in wire.PORTS:
+            for late in (15, 50):
+                for own in (False, True):
+                    why = (port, late, "the joints' dps" if own else "engaging")
+                    moves, over = self.too_fast(port, late, own)
+                    self.assertTrue(moves > 60, why)
+                    self.assertEqual(over, [], why)
+
+    def too_fast(self, port, late, own):
+        """(moves, those faster than 125 positions a second: (ms, id, at, far, ms)), a teleop
+        on port with one leader reply in 12 late by `late` ms: engaging at dps=30, or (own)
+        following at the follower joints' own dps=30."""
+        joints = dict.fromkeys(NAMES, {"dps": 30}) if own else None
+        wl, wf, lead, follow = two_uarts(port, follower=joints)
+        t = bt.Teleop(lead, follow, dps=1000 if own else 30, rest=False)
+        over = []
+
+        def arrived(us, frame):
+            if frame[3] == MOVE and (own or not t.engaged):  # engaged, no dps: the hand's
+                ms = frame[5] | frame[6] << 8
+                for i in range(7, len(frame), 3):
+                    at = wf.sim.position(frame[i])
+                    far = abs((frame[i + 1] | frame[i + 2] << 8) - at)
+                    if far > 125 * ms // 1000 + 1:
+                        over.append((us // 1000, frame[i], at, far, ms))
+
+        wf.on_frame = arrived
+        wl.sim.limp.update(range(1, 7))
+        lated = 0
+        clock = wl.clock
+        for i in range(6000):  # 3 s
+            if i % 10 == 0:
+                for s in range(1, 7):
+                    wl.sim.turn(s, 500 + int(250 * math.sin(i / 1000)) if own else 900)
+            if t.reads % 12 == 0 and t.reads != lated:
+                lated = t.reads
+                wl.late(late, 1)
+            t.step()
+            clock.advance_us(500)
+        return t.moves, over
+
     def test_a_leader_joint_that_does_not_answer_holds_the_follower_naming_it(self):
         for port in wire.PORTS:
             wl, wf, lead, follow = two_uarts(port)
