@@ -752,6 +752,47 @@ class Panel(Browsing):
             box = b.find_element(By.ID, button).find_element(By.XPATH, "ancestor::section")
             self.assertIn(words, box.text)  # shown, not a tooltip a phone never shows
 
+    def test_25_stop_with_the_board_stopped_says_so_in_2_5_s_and_when_it_lands(self):
+        # The board stops answering (its program stopped: SIGSTOP, the connections open)
+        # mid-sequence. STOP tried 20 times for up to 600 ms each and said nothing for 12 s,
+        # the step bold and Halt enabled (until issue 41). Within 2.5 s the page says STOP
+        # has not reached the board and what to do; Halt, which cannot act, is greyed; once
+        # the board answers again, the STOP lands, and the page says so.
+        import signal
+
+        b = self.browser
+        self.open_and_log_in()
+        self.arm()
+        self.add_pose_at(-40)
+        self.add_pose_at(40)
+        self.press("loop")
+        self.press("play")
+        self.assertIsNotNone(until(lambda: panel_state()["playing"] is not None))
+        board = self.server.pid
+        os.kill(board, signal.SIGSTOP)
+        self.addCleanup(os.kill, board, signal.SIGCONT)
+        b.execute_script(  # when the page says it, on the page's clock (a busy machine's
+            # test sees it later)
+            "const m = document.getElementById('msg'); window.saidAt = null;"
+            "new MutationObserver(() => { if (window.saidAt === null &&"
+            "  m.textContent.includes('has not reached')) window.saidAt = performance.now(); })"
+            ".observe(m, {childList: true, characterData: true, subtree: true});"
+            "window.pressedAt = performance.now();"
+        )
+        self.press("stop")
+        said = until(lambda: b.execute_script("return window.saidAt") is not None, 5.0)
+        self.assertIsNotNone(said, self.seen()[:400])
+        took = b.execute_script("return window.saidAt - window.pressedAt")
+        self.assertLess(took, 2500, self.text("msg"))
+        self.assertIn("servos' power", self.text("msg"))
+        self.assertIsNotNone(until(lambda: not b.find_element(By.ID, "halt").is_enabled(), 2.0))
+        time.sleep(1.0)
+        self.assertIn("STOP has not reached the board", self.text("msg"))  # still said
+        os.kill(board, signal.SIGCONT)
+        self.assertIsNotNone(until(lambda: "reached the board at last" in self.text("msg"), 5))
+        self.assertIsNotNone(until(lambda: controller()["limp"] == [1, 2, 3, 4], 2.0))
+        self.assertEqual(panel_state()["playing"], None)
+
     def test_24_record_stop_and_play_back_and_no_teleop_says_why(self):
         b = self.browser
         self.open_and_log_in()
