@@ -10,6 +10,7 @@
 # and in the state: "steps" (each step's ms), "edits" (one more with each change: the page
 # reads the steps again), "playing" (the step playing, or None).
 #
+# Limp, like every order, is the armed page's (STOP is any page's), and leaves it armed.
 # A sequence plays from the armed page only, and holds the joints while it plays: the
 # sliders and the jog are refused until it ends, or is halted. Halted (or the page
 # disarmed), the joints it moves are sent where they are, once a read of their positions
@@ -25,6 +26,7 @@ NAME_MAX = 24
 MS_DEFAULT = 1000  # time to reach an added pose, if the request gives none
 _NAME_CHARS = "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_"
 _PLAYING = "a sequence is playing: stop it first"
+_LIMP = "arm the panel first: Limp is the armed page's (STOP lets go from any page)"
 
 
 def _name(body):
@@ -120,10 +122,13 @@ class Teach:
     # The routes.
 
     async def post_limp(self, body, token):
+        # Limp is teaching, the armed page's (STOP, from any page, is what lets go to be
+        # safe): it ends what drives the joints (a sequence, a stream: no halt, they let go)
+        # and the page stays armed, so that a slider, the jog or Play takes them again.
         panel = self.panel
-        # Limp stops every joint, even with no controller; another page's arming ends.
-        why = None if panel.armed == token else "another page made every joint limp"
-        panel.disarm(halt=False, why=why)
+        if panel.armed != token:
+            raise web.Refused(409, _LIMP)
+        panel.order()
         panel.robot.limp()
         panel.limp = True
         panel.to = {}

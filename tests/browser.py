@@ -444,6 +444,7 @@ class Panel(Browsing):
     def test_9_a_message_covers_no_button_and_goes_when_it_is_over(self):
         b = self.browser
         self.open_and_log_in()
+        self.arm()  # (Limp, pressed below, is the armed page's)
         self.press("save")  # no name: the board says why
         self.assertIsNotNone(until(lambda: "name must be" in self.seen()))
         # Every button, scrolled to the foot of the screen, is there to be pressed.
@@ -464,7 +465,7 @@ class Panel(Browsing):
         self.assertEqual(covered, [])
         self.press("limp")  # the next thing done: the old message goes
         self.assertIsNotNone(until(lambda: "name must be" not in self.seen()), "it stays")
-        self.assertIn("Limp: pose the arm by hand", self.seen())
+        self.assertIn("Limp: every joint lets go; pose the arm by hand", self.seen())
         self.assertIsNotNone(until(lambda: "Limp:" not in self.seen(), 6.0), "news stays")
         # The board's error shows while it lasts, and goes once the board says it is over
         # (here the page's /api/state answers are given an error, then not).
@@ -792,6 +793,24 @@ class Panel(Browsing):
         self.assertIsNotNone(until(lambda: "reached the board at last" in self.text("msg"), 5))
         self.assertIsNotNone(until(lambda: controller()["limp"] == [1, 2, 3, 4], 2.0))
         self.assertEqual(panel_state()["playing"], None)
+
+    def test_26_limp_is_the_armed_pages_and_leaves_it_armed(self):
+        # Limp from a page that was not armed let every joint go and ended the armed page's
+        # sequence; on the armed page it disarmed it with nothing said (until issue 41).
+        b = self.browser
+        self.open_and_log_in()
+        limp = b.find_element(By.ID, "limp")
+        self.assertFalse(limp.is_enabled())  # not armed: greyed, as the sliders are
+        note = limp.find_element(By.XPATH, "ancestor::section").text
+        self.assertIn("the page stays armed", note)
+        self.arm()
+        self.assertIsNotNone(until(lambda: limp.is_enabled()))
+        self.press("limp")
+        self.assertIsNotNone(until(lambda: "every joint lets go" in self.text("teachmsg")))
+        self.assertIsNotNone(until(lambda: controller()["limp"] == [1, 2, 3, 4], 1.0))
+        self.assertTrue(b.find_element(By.ID, "armed").is_selected())
+        self.assertTrue(panel_state()["armed"])
+        self.assertTrue(self.slider("base").is_enabled())
 
     def test_24_record_stop_and_play_back_and_no_teleop_says_why(self):
         b = self.browser

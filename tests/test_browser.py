@@ -34,6 +34,7 @@ TESTS = (
     "test_23_halt_and_limp_say_on_the_page_what_they_do",
     "test_24_record_stop_and_play_back_and_no_teleop_says_why",
     "test_25_stop_with_the_board_stopped_says_so_in_2_5_s_and_when_it_lands",
+    "test_26_limp_is_the_armed_pages_and_leaves_it_armed",
     "test_1_jog_moves_the_tool_point_a_step_and_refuses_what_it_cannot_reach",
     "test_2_stop_ends_a_jog_on_its_way",
     "test_3_ranges_done_before_a_joint_was_swept_is_refused_naming_it_once",

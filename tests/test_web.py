@@ -2045,11 +2045,14 @@ class WhatAUserMet(Tidy):
             self.assertEqual((await state(port, other))["lost"], None)
             await http(port, "POST", "/api/arm", {"on": True}, token)
             self.assertEqual((await state(port, token))["lost"], None)  # armed again
-            await http(port, "POST", "/api/limp", {}, other)
-            self.assertEqual(
-                (await state(port, token))["lost"], "another page made every joint limp"
-            )
-            await http(port, "POST", "/api/arm", {"on": True}, token)
+            # Limp is the armed page's (issue 41): another page's is refused, saying why,
+            # and the armed page goes on (it ended its arming, saying only "another page
+            # made every joint limp", before).
+            status, reply = await http(port, "POST", "/api/limp", {}, other)
+            self.assertEqual(status, 409, reply)
+            self.assertIn("Limp is the armed page's (STOP lets go from any page)", reply["error"])
+            reply = await state(port, token)
+            self.assertEqual((reply["mine"], reply["lost"]), (True, None))
             for _ in range(8):  # the other page polls; this one is silent
                 await http(port, "GET", "/api/state", token=other)
                 await asyncio.sleep_ms(200)
@@ -2250,7 +2253,12 @@ class AfterTheSplit(Tidy):
             self.assertEqual((reply["armed"], reply["lost"]), (False, None))
             await http(port, "POST", "/api/arm", {"on": True}, token)
             reply = (await http(port, "POST", "/api/limp", {}, token))[1]
-            self.assertEqual((reply["armed"], reply["lost"]), (False, None))
+            self.assertEqual((reply["armed"], reply["lost"]), (True, None))  # still armed
+            self.assertTrue(await until(lambda: world.sim.limp == {1, 2, 3, 4}, 200))
+            target = {"targets": {"base": 5}}
+            status, reply = await http(port, "POST", "/api/target", target, token)
+            self.assertEqual(status, 200, reply)  # a slider takes the joints again
+            self.assertEqual((await state(port, token))["limp"], False)
 
         run(scenario)
 
