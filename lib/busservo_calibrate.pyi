@@ -85,10 +85,17 @@ class Calibration:
     def robot(self, bus: BusServo | None = None) -> Robot:
         """A Robot of the calibrated joints, on bus (default: this calibration's), or
         ValueError naming each joint that cannot be calibrated and why."""
-    def save(self, path: str | None = None, links: Mapping[str, float] | None = None) -> Robot:
+    def save(
+        self,
+        path: str | None = None,
+        links: Mapping[str, float] | None = None,
+        dps: float | None = None,
+    ) -> Robot:
         """Write the calibration to path (default busservo_motion.CALIBRATION, robot.json) as
         Robot.load() reads it, with links {name: mm} of busservo_arm.LINKS if given (measured
         with a ruler, for busservo_arm): {"joints": {name: Joint settings}, "links": {...}},
-        keeping what else the file holds (links saved before). Refuses as robot() does, and
-        links that busservo_arm.check_links() refuses (TypeError or ValueError), before the
-        file is touched. Returns the Robot."""
+        keeping what else the file holds (links saved before, and a joint's dps a person set
+        in it). Refuses as robot() does, and links that busservo_arm.check_links() refuses
+        (TypeError or ValueError), before the file is touched. Returns the Robot, each joint
+        at most dps degrees a second if given (a program's cap, as Robot.load() keeps it: not
+        saved)."""

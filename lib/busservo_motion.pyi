@@ -48,6 +48,29 @@ def number(name: str, value: Any, low: float = float("-inf"), high: float = floa
     """value, a finite int or float in low..high; else TypeError or ValueError naming it
     (name), the range and what came."""
 
+def least_dps(joints: Mapping[str, Joint]) -> float | None:
+    """The least dps of joints {name: Joint}, or None when none has one: the speed cap a
+    program's joints ask for, which Robot.load(bus, path, dps) keeps over a file's."""
+
+def toward(
+    pair: list[int],
+    goal: int,
+    i: int,
+    at: list[int],
+    owed: list[int],
+    way: list[int],
+    pps: int,
+    elapsed: int,
+    last_ms: int,
+    since: int,
+) -> int:
+    """One step of joint i of a stream towards goal (a position), at pps positions a second
+    at most (Robot.step(), busservo_teleop): pair[1] becomes the position to send, from at[i]
+    (the last sent) as far as elapsed ms allow (owed[i]: the part of a position carried, in
+    1/1000ths). Returns the ms the move needs at pps from where the servo is (short of at[i]
+    still while the last move, way[i]/1000 positions over last_ms sent `since` ms ago, is on
+    its way); way[i] becomes this move's. Allocates nothing."""
+
 _Pose = Mapping[str, float]
 
 class Joint:
@@ -121,9 +144,11 @@ class Robot:
         """bus: a busservo.BusServo; joints: {name: Joint}, 1..83 of them, each servo_id
         once."""
     @staticmethod
-    def load(bus: BusServo, path: str) -> Robot:
+    def load(bus: BusServo, path: str, dps: float | None = None) -> Robot:
         """A Robot on bus with the calibration save() wrote to path (JSON). A file that is not
-        valid JSON, or holds no "joints", raises ValueError naming the file and why."""
+        valid JSON, or holds no "joints", raises ValueError naming the file and why. dps: a
+        cap in degrees a second that holds whatever the file says: each joint turns at most
+        the least of its own dps (the file's) and dps."""
     def save(self, path: str, **more: object) -> None:
         """Write the joints' calibration to path as JSON, and the keys in more (links=...),
         keeping what else the file holds."""

@@ -91,6 +91,9 @@ class Panel:
     robot: Robot
     """The robot driven (a calibration saved gives the panel a new one: adopt())."""
     bus: BusServo
+    dps: float | None
+    """The speed cap of the robot the panel was given (busservo_motion.least_dps()), which a
+    calibration saved on its page keeps."""
     armed: str | None
     """The session token of the page that armed the panel, or None."""
     arm: Arm | None
