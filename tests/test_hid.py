@@ -368,6 +368,22 @@ class Reports(WithBinding):
         self.xarm.reports += [reply[:64], reply[64:] + bytes(33), BATTERY_7500 + bytes(58)]
         self.assertEqual(self.uart.read(), reply + BATTERY_7500)
 
+    def test_a_frame_s_rest_is_taken_by_its_length_not_by_its_padding(self):
+        # The rest of a long reply in the next report is as many bytes as its Length says:
+        # its last servo at 200 (C8 00: a zero, as padding is), or a controller that pads
+        # with 55, and the reply came cut, or with a frame's start of padding behind it (a
+        # rest taken as noise passed every test once: issue 41).
+        for n in (20, 59):  # 65 bytes, two reports; 182, three
+            reply = bytes((0x55, 0x55, 3 * n + 3, CMD_MULT_SERVO_POS_READ, n))
+            for i in range(1, n + 1):
+                reply += bytes((i, 0xC8, 0x00))  # 200
+            for pad in (0, 0x55, 0xFF):
+                for at in range(0, len(reply), 64):
+                    part = reply[at : at + 64]
+                    self.xarm.reports.append(part + bytes([pad]) * (64 - len(part)))
+                self.xarm.reports.append(BATTERY_7500 + bytes([pad]) * 58)
+                self.assertEqual(self.uart.read(), reply + BATTERY_7500, (n, pad))
+
     def test_a_report_that_starts_no_frame_is_noise_for_the_driver(self):
         self.xarm.reports += [b"\x01\x02\x03" + bytes(61), BATTERY_7500 + bytes(58)]
         bus = busservo.BusServo(self.uart)

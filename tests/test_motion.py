@@ -301,6 +301,18 @@ class Moves(Tidy):
         self.assertEqual(a.stream({"claw": -5}), 1)
         self.assertEqual(a.clamped, 3)
 
+    def test_a_target_exactly_at_a_limit_is_not_counted_as_clamped(self):
+        # The limits are reachable (changed to count them, nothing failed): ints and floats,
+        # move() and stream(), each end; and the teleop, a leader at the follower's limit.
+        w, bus = world()
+        a = arm(bus)
+        for pose in ({"shoulder": -90, "claw": 60}, {"shoulder": 90.0, "claw": 0.0}):
+            a.move(pose, ms=200)
+            self.assertEqual(a.stream(pose), 0, pose)
+        self.assertEqual(a.clamped, 0)
+        a.move({"shoulder": 90.5, "claw": -0.01}, ms=200)
+        self.assertEqual(a.clamped, 2)
+
     def test_a_speed_limited_move_reads_the_positions_first_when_none_are_known(self):
         w, bus = world()
         a = arm(bus)

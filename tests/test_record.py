@@ -707,5 +707,80 @@ class Files(Tidy):
             os.remove(path)
 
 
+class FileEdges(Tidy):
+    # The compact form at its edges (issue 41: each was changed and nothing failed): a key
+    # sample cut short, a position below 0, a byte's delta, two bytes of ms, and what waits
+    # in RAM at stop().
+
+    def recorded(self, reads, n=2):
+        """A Recorder of n joints fed reads [(ticks_ms, [positions])] through take(), stopped:
+        [(t, [positions])] read back from its data, and the data."""
+        w, bus = world()
+        rec = br.Recorder(chain(bus, n), limp=False)
+        for ms, positions in reads:
+            self.assertTrue(rec.take(ms, {i + 1: p for i, p in enumerate(positions)}))
+        recording = rec.stop()
+        return [(t, list(pos)) for t, pos in recording.samples()], recording.data
+
+    def test_a_key_sample_cut_short_reads_back_to_the_samples_before(self):
+        # The power lost while the last piece was written: the samples before it are kept;
+        # reading on past the end raised IndexError (changed so, nothing failed).
+        reads = [(0, [500, 500]), (20, [510, 490]), (40, [900, 100])]  # the last: a key
+        got, data = self.recorded(reads)
+        self.assertEqual(got, [(0, [500, 500]), (20, [510, 490]), (40, [900, 100])])
+        key = 6 + 2 * 2
+        for cut in range(1, key):
+            cut_short = br.Recording(dict(chain(None, 2).joints), None, data[:-cut])
+            got = [(t, list(pos)) for t, pos in cut_short.samples()]
+            self.assertEqual(got, [(0, [500, 500]), (20, [510, 490])], cut)
+
+    def test_a_joint_turned_past_0_by_hand_reads_back_below_0(self):
+        # A limp joint turned past its servo's end reads -3 (signed): in a key sample, and
+        # in a delta after it.
+        reads = [(0, [-3, 500]), (20, [-7, 500]), (40, [2, 500]), (60, [-200, 500])]
+        got, _ = self.recorded(reads)
+        self.assertEqual(got, reads)
+
+    def test_a_byte_holds_minus_128_to_127_positions_between_reads(self):
+        # +128 needs a key sample (a byte of delta holds -128..127): taken as a delta, it
+        # read back as -128. Each kept exactly; the key samples cost their bytes.
+        reads = [(0, [500, 500]), (20, [627, 372]), (40, [755, 244]), (60, [627, 372])]
+        got, data = self.recorded(reads)
+        self.assertEqual(got, reads)
+        # key, delta (+127, -128), key (+128, -128), delta (-128, +128: key)
+        self.assertEqual(len(data), 10 + 4 + 10 + 10)
+
+    def test_two_bytes_of_ms_hold_65534_ms_between_reads_and_a_key_sample_more(self):
+        # 0xFFFF is a key sample's mark: 65535 ms and more go in a key sample's 4 bytes.
+        reads = [(0, [500, 500]), (65534, [501, 500])]
+        for gap in (65535, 65536, 100000, 3600000):
+            reads.append((reads[-1][0] + gap, [502, 500]))
+            reads.append((reads[-1][0] + 20, [503, 500]))
+        got, _ = self.recorded(reads)
+        self.assertEqual(got, reads)
+
+    def test_stop_writes_every_piece_that_waits_in_ram(self):
+        # Samples wait in RAM for a quiet moment, a piece (256 bytes) at a time; at stop()
+        # more than a piece may wait: each goes to the file (one write of 256 bytes left the
+        # rest out: the last samples lost, changed so, nothing failed).
+        w, bus = world()
+        path = scratch("record") + ".rec"
+        rec = br.Recorder(chain(bus, 1), path=path)
+        try:
+            t = 0
+            while t < 20000 and rec._w <= br.PIECE:  # a reply that crossed a piece's end
+                w.sim.turn(1, 500 + (t // 20) % 50)
+                rec.step()
+                w.clock.advance_ms(1)
+                t += 1
+            self.assertTrue(rec._w > br.PIECE, rec._w)
+            kept = rec.samples
+            recording = rec.stop()
+            self.assertEqual(len(recording), kept)
+            self.assertEqual(len(br.Recording.load(path)), kept)
+        finally:
+            os.remove(path)
+
+
 if __name__ == "__main__":
     unittest.main()

@@ -289,6 +289,30 @@ class Safety(Tidy):
                     self.assertTrue(moves > 60, why)
                     self.assertEqual(over, [], why)
 
+    def test_after_a_pause_in_the_reads_it_goes_to_the_leader_at_dps_again(self):
+        # The leader silent for 600 ms (a cable, the controller busy), moved meanwhile by
+        # 300 positions: once its reads come again, the follower goes there at dps, then
+        # follows. (Engaged still, it leapt there in one cycle's move: a change that kept it
+        # engaged passed every test once, issue 41.)
+        wl, wf, lead, follow = two_uarts()
+        t = bt.Teleop(lead, follow, dps=30, rest=False)  # 125 positions a second
+        wl.sim.limp.update(range(1, 7))
+        run(t, (wl, wf), 1500, still(500))
+        self.assertTrue(t.engaged)
+        wl.sim.silent = True
+        run(t, (wl, wf), 600, still(800))
+        wl.sim.silent = False
+        first = len(moves(wf))
+        run(t, (wl, wf), 600, still(800))
+        self.assertFalse(t.engaged)  # on its way, at dps
+        at = wf.sim.position(1)
+        self.assertTrue(500 < at < 500 + 125 * 6 // 10 + 3, at)
+        for ms, pose in moves(wf)[first:]:
+            self.assertTrue(pose[1] <= 580, (ms, pose))
+        run(t, (wl, wf), 2500, still(800))
+        self.assertTrue(t.engaged)
+        self.assertEqual(wf.sim.position(1), 800)
+
     def too_fast(self, port, late, own):
         """(moves, those faster than 125 positions a second: (ms, id, at, far, ms)), a teleop
         on port with one leader reply in 12 late by `late` ms: engaging at dps=30, or (own)

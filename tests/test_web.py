@@ -2169,6 +2169,36 @@ class WhatAUserMet(Tidy):
 
         on_arm(scenario)
 
+    def test_another_pages_halt_while_a_home_reads_the_positions_ends_it(self):
+        # Halt (POST /api/stop) from another page is an order too: the home whose read was
+        # on its way when it came is not made (409, "not homed"), nothing moves after it (a
+        # change that let the home go on passed every test once: issue 41).
+        async def scenario(port, world, robot, path):
+            token = await armed(port)
+            other = await login(port)
+            home = {"step": "home", "confirm": True}
+            for _ in range(5):
+                status, reply = await http(port, "POST", "/api/arm", {"on": True}, token)
+                self.assertEqual(status, 200, reply)
+                status, reply = await calibrate(port, world, token)
+                self.assertEqual(status, 200, reply)
+                status, reply = await http(port, "POST", "/api/calibrate", {"step": "save"}, token)
+                self.assertEqual(status, 200, reply)
+                before = len(moves(world))
+                going = asyncio.create_task(http(port, "POST", "/api/calibrate", home, token))
+                await asyncio.sleep_ms(8)  # its read is on its way
+                await http(port, "POST", "/api/stop", {}, other)
+                status, reply = await going
+                await asyncio.sleep_ms(100)
+                if status == 409 and "not homed" in reply["error"]:
+                    self.assertEqual(len(moves(world)), before, moves(world)[before:])
+                    return  # halted while it read: the case this test is for
+                self.assertEqual(status, 200, reply)  # taken before or after: homed
+            # (Or, on a machine so busy that the halt came before or after the read 5 times.)
+            self.fail("5 homes made though another page halted each while it read")
+
+        on_arm(scenario)
+
     def test_calibration_is_refused_while_a_sequence_plays(self):
         async def scenario(port, world, robot, path):
             token = await armed(port)
@@ -2539,6 +2569,35 @@ class Recording(Tidy):
             self.assertEqual((await state(port, token))["teleop"], None)  # no leader given
 
         recorded(scenario)
+
+    def test_a_recording_stops_by_itself_at_its_documented_length(self):
+        # docs/panel.md: 120 s, 6 joints at 25 reads a second: 24 KB of a board's flash
+        # (20 minutes, 240 KB, passed every test once). Then, shortened to 1 s: it stops by
+        # itself, kept, the joints limp still.
+        self.assertEqual(busservo_web_record.MAX_S, 120)
+        with open("docs/panel.md") as f:
+            self.assertIn(
+                "a recording also stops by itself after 120 s", " ".join(f.read().split())
+            )
+        kept = busservo_web_record.MAX_S
+
+        async def scenario(port, world, robot):
+            token = await armed(port)
+            status, reply = await http(port, "POST", "/api/record", {"on": True}, token)
+            self.assertEqual(status, 200, reply)
+            await polled(port, token, 600)
+            self.assertTrue((await state(port, token))["rec"]["recording"])
+            await polled(port, token, 800)  # past 1 s
+            rec = (await state(port, token))["rec"]
+            self.assertFalse(rec["recording"], rec)
+            self.assertTrue(0.8 <= rec["s"] <= 1.3 and rec["samples"] > 10, rec)
+            self.assertEqual(world.sim.limp, {1, 2, 3, 4})
+
+        busservo_web_record.MAX_S = 1
+        try:
+            recorded(scenario)
+        finally:
+            busservo_web_record.MAX_S = kept
 
     def test_a_recording_is_kept_and_replayed_at_its_pace(self):
         async def scenario(port, world, robot):
