@@ -43,6 +43,7 @@
 # up to 59 ids fit (a reply to 59 spans 3 reports).
 import errno
 import os
+import re
 import sys
 import time
 
@@ -105,8 +106,17 @@ def _text(path):
 
 
 def _controllers(hid):
+    # In the order of their paths' numbers (hidraw3 before hidraw10), as a person counts.
     found = [d for d in hid.enumerate(VID, PID) if d.get("path")]
-    return sorted(found, key=lambda d: _text(d["path"]))
+    return sorted(found, key=lambda d: _in_number_order(_text(d["path"])))
+
+
+def _in_number_order(text):
+    # A sort key: text's digits as numbers, the rest as text.
+    key = []
+    for part in re.split(r"(\d+)", text):
+        key.append((0, int(part), "") if part.isdigit() else (1, 0, part))
+    return key
 
 
 def _describe(d):

@@ -19,6 +19,7 @@
 #
 # The `busservo` command (main(), below) is this module too: `busservo --help` says it.
 import errno
+import io
 import os
 import re
 import select
@@ -242,7 +243,7 @@ _USAGE = """usage: busservo COMMAND ...
   busservo ports                       the controller's ports: serial (the USB ones first), HID
   busservo check PORT                  the wiring check: the battery and the round trip
   busservo scan PORT                   the servos that answer (ids 0..253), and where they are
-  busservo positions PORT ID [ID...]   the positions of servos ID... (84 at most)
+  busservo positions PORT ID [ID...]   the positions of servos ID... (84 at most, 59 on HID)
   busservo move PORT ID POS MS [%(checked)s]
                                        move servo ID to POS (0..1000) over MS ms; Ctrl-C
                                        stops it where it is
@@ -319,6 +320,7 @@ _FLAGS = ("--json", _CHECKED, "-h", "--help", "-V", "--version")
 _TIMEOUT_MS = 500
 _PER_ID_MS = 10
 _IDS_MAX = 84  # positions one query may ask for: the reply must fit in a Length byte
+_HID_IDS_MAX = 59  # and on a HID controller: the request must fit in a report (busservo_hid)
 # Ids a scan asks for at a time: 6 queries; each request fits in a HID controller's report too
 # (64 bytes: 59 ids at most; busservo_hid refuses a longer frame).
 _SCAN_IDS = 50
@@ -351,6 +353,7 @@ class _Run:
         self.port = None
         self.uarts = []  # the ports, once open: main() closes them
         self.waited = _TIMEOUT_MS  # the last query's timeout, for the words when it ran out
+        self.said = False  # the JSON line is printed (--json: one a command)
 
     def ms(self, ids=0):
         """A query's timeout, for the positions of ids servos (0: the battery)."""
@@ -365,6 +368,14 @@ class _Run:
             import json
 
             print(json.dumps(value))
+            self.said = True
+
+    def fail(self, why):
+        """A command that failed: why, in words (stderr with --json), and with --json a line
+        {"error": why} on stdout, unless the command printed its JSON already."""
+        self.say(why)
+        if self.json and not self.said:
+            self.result({"error": why})
 
 
 def _parse(args):
@@ -395,8 +406,13 @@ def _int(text, what, low, high):
     return value
 
 
-def _ids(words, what, high):
+def _ids(words, what, high, port=None):
     ids = [_int(i, "an id", 0, 254) for i in words]
+    if port and (port == "hid" or port.startswith("hid:")) and len(ids) > _HID_IDS_MAX:
+        raise _Usage(
+            "%s wants 1..%d ids on a HID controller (its request fits in a 64-byte report), "
+            "got %d" % (what, _HID_IDS_MAX, len(ids))
+        )
     if not 1 <= len(ids) <= high:
         raise _Usage("%s wants 1..%d ids, got %d" % (what, high, len(ids)))
     return ids
@@ -502,14 +518,10 @@ def _check(run, words, options):
     if words:
         raise _Usage("check takes PORT only")
     bus, _ = _bus(run)
+    if run.port == "hid":  # the first plugged in: which one it is
+        run.say("the HID controller at %s" % run.uarts[-1].port)
     start = time.monotonic()
-    try:
-        mv = bus.read_battery(run.ms())
-    except OSError as e:
-        if e.errno != errno.ETIMEDOUT:
-            raise
-        _checklist(run, sys.stderr if run.json else sys.stdout, e)
-        return 1
+    mv = bus.read_battery(run.ms())  # silent: main() says the checklist, as for every command
     took = (time.monotonic() - start) * 1000
     run.result({"battery_mv": mv, "round_trip_ms": round(took, 1), "noise": bus.noise})
     run.say("battery: %.2f V" % (mv / 1000))
@@ -521,7 +533,7 @@ def _check(run, words, options):
 
 
 def _positions(run, words, options):
-    ids = _ids(words, "positions", _IDS_MAX)
+    ids = _ids(words, "positions", _IDS_MAX, run.port)
     bus, _ = _bus(run)
     read = bus.read_positions(ids, run.ms(len(ids)))
     run.result({str(i): read[i] for i in ids})
@@ -560,7 +572,7 @@ def _move(run, words, options):
     bus, simulated = _bus(run)
     now = _where(bus, run, servo_id)
     if now is None:
-        run.say("servo %d does not answer: its power, the bus cable, its id" % servo_id)
+        run.fail("servo %d does not answer: its power, the bus cable, its id" % servo_id)
         return 1
     run.say("servo %d is at %d; this moves it to %d over %d ms" % (servo_id, now, position, ms))
     if not (_CHECKED in options or simulated):
@@ -583,7 +595,7 @@ def _move(run, words, options):
         return 130
     at = _where(bus, run, servo_id)
     run.result({"servo": servo_id, "from": now, "to": position, "at": at})
-    if at is None:
+    if at is None:  # (its JSON, printed: "at": null)
         run.say("servo %d does not answer now: its power, the bus cable" % servo_id)
         return 1
     run.say("servo %d is at %d" % (servo_id, at))
@@ -591,7 +603,7 @@ def _move(run, words, options):
 
 
 def _limp(run, words, options):
-    ids = _ids(words, "limp", _UNLOAD_MAX)
+    ids = _ids(words, "limp", _UNLOAD_MAX, run.port)
     bus, simulated = _bus(run)
     _answers(bus, run)
     named = ", ".join(str(i) for i in ids)
@@ -744,7 +756,10 @@ def _serve(robot, key, tcp, host):
         await asyncio.sleep(0.2)
         if not task.done():
             shown = "127.0.0.1" if host in (_ANY_HOST, "::") else host
-            print("open http://%s:%d/ and log in with the password %r" % (shown, tcp, key))
+            if ":" in shown:
+                shown = "[%s]" % shown  # an IPv6 address, in a URL
+            # (not the password: what is printed may end up in a log, or on a screen)
+            print("open http://%s:%d/ and log in with the password you gave" % (shown, tcp))
             print("(Ctrl-C stops the panel)", flush=True)
         await task
 
@@ -755,13 +770,14 @@ def _serve(robot, key, tcp, host):
         return 1
     except OSError as e:
         if e.errno in (errno.EADDRINUSE, getattr(errno, "WSAEADDRINUSE", 0)):
-            print("port %d is in use (another panel?): give another with --port N" % tcp)
+            why = "port %d is in use (another panel?): give another with --port N" % tcp
         elif e.errno == errno.EADDRNOTAVAIL:
-            print("%s is no address of this computer's: give one with --host H" % host)
+            why = "%s is no address of this computer's: give one with --host H" % host
         elif e.errno == errno.EACCES and tcp < 1024:
-            print("port %d needs the administrator: give one above 1023 with --port N" % tcp)
+            why = "port %d needs the administrator: give one above 1023 with --port N" % tcp
         else:
             raise
+        print("busservo: " + why, file=sys.stderr)
         return 1
     finally:
         robot.hold()
@@ -1151,16 +1167,18 @@ def main(argv=None):
         return 2
     except OSError as e:
         if e.errno == errno.ETIMEDOUT and run and run.port:
-            print("busservo: ", end="", file=sys.stderr)
-            _checklist(run, sys.stderr, e)
-            return 1
-        if e.strerror and len(e.args) > 1:
+            words = io.StringIO()
+            _checklist(run, words, e)
+            why = words.getvalue().rstrip("\n")
+        elif e.strerror and len(e.args) > 1:
             why = e.strerror
             if e.filename:  # a file's error (robot.json a folder, say): its name first
                 why = "%s: %s" % (e.filename, why)
         else:
             why = str(e)
         print("busservo: %s" % why, file=sys.stderr)
+        if run and run.json and not run.said:
+            run.result({"error": why})  # --json: a line, always
         return 1
     except KeyboardInterrupt:
         return 130
@@ -1171,7 +1189,40 @@ def main(argv=None):
                 close()
 
 
+class _Stdout:
+    """The command's stdout, whose reader may go away (busservo ... | head -1): then what it
+    says goes nowhere, quietly, as Unix tools end on a closed pipe, and the command goes on
+    (a group it started is still stopped at Ctrl-C, not left running by a traceback)."""
+
+    def __init__(self, out):
+        self._out = out
+
+    def write(self, text):
+        try:
+            return self._out.write(text)
+        except BrokenPipeError:
+            self._gone()
+            return len(text)
+
+    def flush(self):
+        try:
+            self._out.flush()
+        except BrokenPipeError:
+            self._gone()
+
+    def _gone(self):
+        # The descriptor becomes /dev/null: what is left in the buffer, and Python's flush
+        # as it exits, go there rather than to the closed pipe.
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, self._out.fileno())
+        os.close(null)
+
+    def __getattr__(self, name):
+        return getattr(self._out, name)
+
+
 def _entry():
+    sys.stdout = _Stdout(sys.stdout)
     sys.exit(main())
 
 

@@ -440,7 +440,10 @@ class Recording:
                         '%s, line %d: a sample must be {"t": ms, "pose": {name: degrees}}'
                         " of every joint (%s)" % (path, line, e)
                     )
-                enc.add(round(t), got)
+                try:
+                    enc.add(round(t), got)
+                except ValueError as e:  # a time that goes back: where it is, too
+                    raise ValueError("%s, line %d: %s" % (path, line, e))
             rec.data = bytes(enc.data)
             return rec
 

@@ -236,6 +236,20 @@ class Finding(WithBinding):
         self.assertEqual(self.port().port, "hid:/dev/hidraw3")
         self.assertEqual(self.port("hid:/dev/hidraw7").port, "hid:/dev/hidraw7")
 
+    def test_hid_is_the_first_in_the_order_of_the_paths_numbers(self):
+        # hidraw3 before hidraw10, as a person counts (string order opened hidraw10 first:
+        # issue 42), and `busservo check hid` names the one it opened.
+        sim = busservo_sim.SimController(baudrate=None)
+        self.install(Binding(Controller("/dev/hidraw10"), Controller("/dev/hidraw3", sim=sim)))
+        self.assertEqual(
+            [port for port, _ in busservo_hid.ports()], ["hid:/dev/hidraw3", "hid:/dev/hidraw10"]
+        )
+        from test_host import busservo_command
+
+        status, out, err = busservo_command("check", "hid")
+        self.assertEqual(status, 0, out + err)
+        self.assertEqual(out.split("\n")[0], "the HID controller at hid:/dev/hidraw3")
+
     def test_a_path_that_is_not_text_comes_back_byte_for_byte(self):
         c = Controller()
         c.path = b"\\\\?\\hid#vid_0483&pid_5750#\xff"

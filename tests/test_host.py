@@ -2,8 +2,10 @@
 # pyserial on a pty with the simulated controller at the far end (sh boards/unix.sh
 # --sim-pty), as a controller on USB is; the busservo command on good and bad input; and
 # pip install . of a copy of the checkout into a scratch venv, then the command it installs.
+import asyncio
 import errno
 import io
+import json
 import os
 import select
 import shutil
@@ -570,10 +572,29 @@ class ScriptedPeers(WithPeers):
         ):
             self.assert_no_answer(command, busservo_command(*command))
         # How long it waited: 500 ms, and 10 ms more a servo asked.
+        # On stderr, behind "busservo: ", as every command's error (check said it on stdout
+        # alone, until issue 42).
         said = "no answer from the controller on %s within %d ms. Check:"
-        self.assertEqual(busservo_command("check", port)[1].split("\n")[0], said % (port, 500))
+        status, out, err = busservo_command("check", port)
+        self.assertEqual((err.split("\n")[0], out), ("busservo: " + said % (port, 500), ""))
         err = busservo_command("positions", port, 1, 2)[2]
         self.assertEqual(err.split("\n")[0], "busservo: " + said % (port, 520))
+
+    def test_json_says_an_error_in_a_line_of_its_own(self):
+        # --json promises a line on stdout: a failed command printed none (until issue 42).
+        port = self.peer(delay=None).path
+        for command in (("check", port), ("positions", port, 1, 2), ("move", port, 1, 2, 3)):
+            status, out, err = busservo_command(*command, "--json")
+            self.assertEqual(status, 1, command)
+            self.assertEqual(len(out.splitlines()), 1, out)
+            error = json.loads(out)["error"]
+            self.assertTrue(error.startswith("no answer from the controller on %s" % port))
+            self.assertIn("busservo: " + error.split("\n")[0], err)
+        status, out, err = busservo_command("move", "--sim", 9, 2, 3, "--json")
+        self.assertEqual(status, 1)
+        self.assertEqual(
+            json.loads(out), {"error": "servo 9 does not answer: its power, the bus cable, its id"}
+        )
 
     def test_the_command_waits_for_a_controller_behind_usb(self):
         # USB adds its latency to the wire's (16 ms of an FTDI's timer, a busy computer):
@@ -633,9 +654,9 @@ class ScriptedPeers(WithPeers):
             "no answer from the controller on %s within 500 ms, though 6 bytes came, 6 of "
             "them no frame: the controller at another baud rate than 9600, or another "
             "program on the port" % port,
-            out,
+            err,
         )
-        self.assertNotIn("Check:", out)
+        self.assertNotIn("Check:", err)
         status, out, err = busservo_command("positions", port, 1, 2)
         self.assertEqual(status, 1, out + err)
         self.assertIn("though 11 bytes came, 11 of them no frame", err)
@@ -931,6 +952,88 @@ class CommandLine(Scratch):
         self.assertEqual(json.loads(out), {"servo": 2, "from": 500, "to": 600, "at": 600})
         status, out, _ = busservo_command("ports", "--json")
         self.assertIsInstance(json.loads(out), list)
+
+    def test_a_reader_that_goes_away_ends_nothing_and_says_nothing(self):
+        # busservo --help | head -1: the reader gone, the command printed "busservo: Broken
+        # pipe" and ended, exit 1 (until issue 42); a group it had started ran on. Now what
+        # it says goes nowhere, quietly, and it ends as it would.
+        for command, status in (
+            (("--help",), 0),
+            (("scan", "--sim"), 0),
+            (("positions", "--sim", 1, 7), 1),
+            (("group", "--sim", 1), 0),
+        ):
+            read, write = os.pipe()
+            os.close(read)  # the reader is gone before the command says anything
+            done = subprocess.run(
+                [PYTHON, "-m", "busservo_host"] + [str(a) for a in command],
+                env=dict(os.environ, PYTHONPATH=os.path.join(ROOT, "lib")),
+                stdout=write,
+                stderr=subprocess.PIPE,
+                text=True,
+                timeout=60,
+            )
+            os.close(write)
+            self.assertEqual((done.returncode, done.stderr), (status, ""), command)
+
+    def test_the_panel_says_its_address_in_a_url_and_not_the_password(self):
+        # An IPv6 host in brackets (http://::1:8080/ is no URL); the password given is not
+        # printed (it may end up in a log, or on a screen); the panel's own errors as every
+        # command's, on stderr behind "busservo: " (they went to stdout, bare: issue 42).
+        import busservo_web
+
+        async def serve(robot, password, port=80, arm=None, path="robot.json", host="0.0.0.0"):
+            await asyncio.sleep(0.5)  # serving, a while
+
+        for host, shown in (("::1", "[::1]"), ("127.0.0.1", "127.0.0.1"), ("::", "127.0.0.1")):
+            with mock.patch.object(busservo_web, "serve", serve):
+                status, out, err = busservo_command(
+                    "panel", "--sim", "--password", "a password!", "--host", host, "--port", 8123
+                )
+            self.assertEqual(status, 0, out + err)
+            self.assertIn(
+                "open http://%s:8123/ and log in with the password you gave" % shown, out
+            )
+            self.assertNotIn("a password!", out + err)
+
+        async def refused(robot, password, port=80, arm=None, path="robot.json", host="0.0.0.0"):
+            raise OSError(errno.EADDRNOTAVAIL, "cannot assign requested address")
+
+        with mock.patch.object(busservo_web, "serve", refused):
+            status, out, err = busservo_command(
+                "panel", "--sim", "--password", "a password!", "--host", "1.2.3.4"
+            )
+        self.assertEqual(status, 1)
+        self.assertEqual(
+            err, "busservo: 1.2.3.4 is no address of this computer's: give one with --host H\n"
+        )
+        self.assertNotIn("no address", out)
+
+    def test_a_hid_controller_takes_59_ids_a_query_said_in_the_commands_words(self):
+        # 60 ids on HID failed with the transport's words (a frame of 65 bytes...): the
+        # command says what it takes, before anything is opened.
+        ids = list(range(1, 61))
+        for port in ("hid", "hid:/dev/hidraw3"):
+            for command in ("positions", "limp"):
+                status, out, err = busservo_command(command, port, *ids)
+                self.assertEqual((status, out), (2, ""), err)
+                self.assertIn(
+                    "%s wants 1..59 ids on a HID controller (its request fits in a 64-byte "
+                    "report), got 60" % command,
+                    err,
+                )
+        self.assertIn("(84 at most, 59 on HID)", busservo_command("--help")[1])
+
+    def test_a_recordings_time_that_goes_back_is_said_with_its_line(self):
+        # Every other bad line of a .jsonl says FILE, line N: this one said only "t must
+        # not go back" (issue 42), from Recording.load() too.
+        path = os.path.join(self.scratch, "back.jsonl")
+        with open(path, "w") as f:
+            f.write('{"names": ["base"], "joints": {"base": {"servo_id": 1}}}\n')
+            f.write('{"t": 100, "pose": {"base": 0}}\n{"t": 50, "pose": {"base": 1}}\n')
+        status, out, err = busservo_command("play", "--sim", path)
+        self.assertEqual(status, 2, out + err)
+        self.assertIn("%s, line 3: t must not go back, got 50 after 100" % path, err)
 
     def test_options_are_checked_as_the_words_are(self):
         for command, words in (
