@@ -93,8 +93,9 @@ else:
     sequence.save(PATH)
     print("saved %d poses to %s" % (len(sequence), PATH))
     sequence = bm.Sequence.load(PATH)
-    print("playing back (to the first pose at 60 degrees/s first)")
-    time.sleep_ms(arm.home(sequence.steps[0][0], dps=60))
+    first = DPS or 60  # (the joints' own DPS would hold over a faster home)
+    print("playing back (to the first pose at %d degrees/s first)" % first)
+    time.sleep_ms(arm.home(sequence.steps[0][0], dps=first))
     player = sequence.play(arm)
     while not player.done:
         if player.step():

@@ -226,6 +226,29 @@ class Pages(unittest.TestCase):
             if name.endswith(".py"):
                 self.assertIn("\n| `%s` | " % name, text, "docs/basics.md's examples table")
 
+    def test_every_package_has_its_row_and_each_example_its_package(self):
+        # docs/boards.md's table of the packages: lib/busservo_teleop.json had no row, though
+        # teleop.py's header names it (issue 42). Each package file a row; each example's
+        # package (its header's mip line) one whose row names the example.
+        with open("docs/boards.md") as f:
+            rows = [line for line in f if line.startswith("| `")]
+        packages = ["package.json"] + sorted(
+            "lib/" + name for name in os.listdir("lib") if name.endswith(".json")
+        )
+        for package in packages:
+            row = [line for line in rows if line.startswith("| `%s` |" % package)]
+            self.assertEqual(len(row), 1, package)
+        for name in sorted(os.listdir("examples")):
+            if not name.endswith(".py"):
+                continue
+            with open("examples/" + name) as f:
+                head = [line for line in f if line.startswith("#   mpremote mip install ")]
+            if not head:
+                continue
+            package = head[0].split()[4]
+            row = [line for line in rows if line.startswith("| `%s` |" % package)][0]
+            self.assertIn("`%s`" % name[:-3], row.split("|")[3], (name, package))
+
     def test_the_wiring_warns_of_5_v(self):
         # (assertTrue, not assertIn: a failure names what is missing, not the whole page)
         for doc in (FRONT, "docs/boards.md", "boards/README.md"):
