@@ -1010,8 +1010,8 @@ MUTANTS = {
         # before the servo is there.
         (
             "step-dps-tenfold",
-            "                owed[i] += pps * elapsed",
-            "                owed[i] += 10 * pps * elapsed",
+            "    owed[i] += pps * elapsed",
+            "    owed[i] += 10 * pps * elapsed",
             "a slowed joint's steps are ten times its dps: each frame commits it to a long "
             "glide, and a target streamed meanwhile waits for it",
         ),
@@ -1038,15 +1038,15 @@ MUTANTS = {
         ),
         (
             "step-owed-dropped",
-            "                owed[i] -= most * 1000",
-            "                owed[i] = 0",
+            "    owed[i] -= most * 1000",
+            "    owed[i] = 0",
             "the part of a position a frame cannot take is lost: a slow joint (a few "
             "degrees/s) never moves, a faster one runs slow",
         ),
         (
             "step-owed-kept-at-goal",
-            "                    most = owed[i] = 0  # there: nothing owed",
-            "                    most = 0  # there: nothing owed",
+            "        most = owed[i] = 0  # there: nothing owed",
+            "        most = 0  # there: nothing owed",
             "a joint that waited at its target goes its next way in one long glide, "
             "deaf to the targets after",
         ),
@@ -1072,18 +1072,14 @@ MUTANTS = {
         ),
         (
             "step-glide-tenfold-short",
-            "                need = (abs(position - at[i]) * 1000 + pps - 1) // pps  # ms at its"
-            " dps",
-            "                need = (abs(position - at[i]) * 100 + pps - 1) // pps  # ms at its"
-            " dps",
+            "    far = abs(position - a) * 1000  # in 1/1000 positions",
+            "    far = abs(position - a) * 100  # in 1/1000 positions",
             "a long step glides a tenth of its time at the dps: the joint jerks at ten times its"
             " dps, then waits",
         ),
         (
             "step-dps-one-way",
-            "                elif position < at[i] - most:\n"
-            "                    position = at[i] - most\n"
-            "                    fresh = True\n",
+            "    elif position < a - most:\n        position = a - most\n",
             "",
             "the stream's dps limit holds going up only: going down, full speed",
         ),
@@ -1686,10 +1682,10 @@ MUTANTS = {
             "after a sequence ends or is stopped, the sliders and the jog are refused for ever",
         ),
         (
-            "limp-keeps-arming",
-            "        panel.disarm(halt=False, why=why)",
-            "        panel.order()",
-            "Limp leaves the page armed: a drag moves the arm the person is posing",
+            "limp-from-any-page",
+            "        if panel.armed != token:\n            raise web.Refused(409, _LIMP)",
+            "        if False:\n            raise web.Refused(409, _LIMP)",
+            "another page's Limp lets the armed page's arm go, its sequence ended",
         ),
     ],
     # busservo_web_jog: the arm's jog (was in busservo_web_arm, which had no mutants).
@@ -2123,8 +2119,8 @@ MUTANTS = {
         ),
         (
             "save-uncalibrated",
-            "        robot = self.robot()\n",
-            "        robot = self._robot\n",
+            "        joints = self.joints()\n",
+            "        joints = dict(self._robot.joints)\n",
             "save() writes the servos as they came (no trims, full reach) and refuses nothing",
         ),
         (
