@@ -800,7 +800,11 @@ class Panel(Browsing):
         b = self.browser
         self.open_and_log_in()
         limp = b.find_element(By.ID, "limp")
-        self.assertFalse(limp.is_enabled())  # not armed: greyed, as the sliders are
+        # Not armed: greyed, as the sliders are (from the start: it showed enabled until the
+        # first state came, once).
+        self.assertFalse(limp.is_enabled())
+        time.sleep(0.5)  # polls answered
+        self.assertFalse(limp.is_enabled())
         note = limp.find_element(By.XPATH, "ancestor::section").text
         self.assertIn("the page stays armed", note)
         self.arm()
