@@ -15,6 +15,9 @@
 #   written(buf, ...)   what a UART's write(buf), write(buf, n) or write(buf, off, n) writes
 #   UART                a base for a computer's port: read(), deinit() and `with`, made of its
 #                       any(), readinto() and close()
+#   BUSY_MS             what a busy computer may add to each of a USB link's hand-overs, ms:
+#                       a computer's port counts it in its latency_ms (busservo_host's serial
+#                       ports, busservo_hid's controllers)
 #
 # Ticks wrap at 2**30, as on a 32-bit board: ticks_diff() and ticks_add() are MicroPython's.
 # json, and asyncio with what goes with it (async_sleep_ms, wait_for_ms, Stream,
@@ -25,6 +28,7 @@ import sys as _sys
 import time as _time
 import types
 
+BUSY_MS = 20
 _PERIOD = 1 << 30
 _MASK = _PERIOD - 1
 _HALF = _PERIOD >> 1

@@ -48,7 +48,7 @@ import sys
 import time
 
 import busservo_cpython
-from busservo_host import BUSY_MS
+from busservo_cpython import BUSY_MS
 
 VID = 0x0483  # STMicroelectronics' vendor id, which these controllers use
 PID = 0x5750

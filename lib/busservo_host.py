@@ -27,11 +27,9 @@ import sys
 import time
 
 import busservo_cpython
+from busservo_cpython import BUSY_MS  # a busy computer's lateness, which latency_ms counts
 
 BAUDRATE = 9600
-# What a busy computer may add to each of a USB link's hand-overs, ms: a port's latency_ms
-# counts it.
-BUSY_MS = 20
 # How often a USB-serial chip hands the bytes it took off the wire over to the computer, by
 # its USB vendor id: an FTDI when its latency timer runs out (16 ms by default; on Linux
 # /sys/bus/usb-serial/devices/ttyUSB0/latency_timer says it), a CH340 or CH9102 every few ms.
