@@ -353,7 +353,8 @@ class Panel(Browsing):
             time.sleep(0.5)  # the live positions caught up
             self.browser.save_screenshot(SCREENSHOT)
 
-    def test_3_stop_mid_sequence_lets_every_joint_go_limp(self):
+    def playing(self):
+        """Logged in and armed, a sequence of two poses (base -40 and 40) playing in a loop."""
         self.open_and_log_in()
         self.arm()
         self.add_pose_at(-40)
@@ -361,6 +362,9 @@ class Panel(Browsing):
         self.press("loop")
         self.press("play")
         self.assertIsNotNone(until(lambda: panel_state()["playing"] is not None))
+
+    def test_3_stop_mid_sequence_lets_every_joint_go_limp(self):
+        self.playing()
         time.sleep(0.7)  # mid-sequence
         self.press("stop")
         self.assertIsNotNone(until(lambda: controller()["limp"] == [1, 2, 3, 4], 1.0))
@@ -762,13 +766,7 @@ class Panel(Browsing):
         import signal
 
         b = self.browser
-        self.open_and_log_in()
-        self.arm()
-        self.add_pose_at(-40)
-        self.add_pose_at(40)
-        self.press("loop")
-        self.press("play")
-        self.assertIsNotNone(until(lambda: panel_state()["playing"] is not None))
+        self.playing()
         board = self.server.pid
         os.kill(board, signal.SIGSTOP)
         self.addCleanup(os.kill, board, signal.SIGCONT)
