@@ -406,7 +406,7 @@ def _int(text, what, low, high):
 
 def _ids(words, what, high, port=None):
     ids = [_int(i, "an id", 0, 254) for i in words]
-    if port and (port == "hid" or port.startswith("hid:")) and len(ids) > _HID_IDS_MAX:
+    if port and _is_hid(port) and len(ids) > _HID_IDS_MAX:
         raise _Usage(
             "%s wants 1..%d ids on a HID controller (its request fits in a 64-byte report), "
             "got %d" % (what, _HID_IDS_MAX, len(ids))
@@ -427,9 +427,14 @@ def _hid():
     return busservo_hid
 
 
+def _is_hid(port):
+    # PORT names a USB HID controller: hid (the first) or hid:PATH.
+    return port == "hid" or port.startswith("hid:")
+
+
 def _open(port):
     """The UART for PORT: hid or hid:PATH a USB HID controller, else a serial port."""
-    if port == "hid" or port.startswith("hid:"):
+    if _is_hid(port):
         hid = _hid()
         if hid is None:
             raise OSError(errno.ENOENT, "no busservo_hid module for %s: pip install ." % port)
